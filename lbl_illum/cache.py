@@ -1,0 +1,238 @@
+"""The irradiance cache: one record set per diffuse level (§3.4), each with its octree (§3.3).
+
+A record holds a primary evaluation of the indirect irradiance (Eq. 2): position
+P_i [m], unit normal N_i, irradiance E_i (RGB, photometric channels) [lux] and
+R_i [m], the harmonic mean distance of its hemisphere rays (Eq. 4) clamped to the
+spacing limits.  Level k holds the values that serve queries made after k diffuse
+reflections; a value computed after k bounces never stands in for one after fewer.
+
+Records and octree nodes are growable structure-of-arrays buffers; the compiled
+kernels of :mod:`lbl_illum.octree` insert and look them up.  A cache is plain data:
+it can be saved, loaded and merged, and the same records always give the same
+answers, whatever order they were made in.
+
+File format (``.npz``, version 1): arrays ``L{k}_P``, ``L{k}_N``, ``L{k}_E``,
+``L{k}_R`` per level and a ``header`` holding JSON: ``format``, ``version``,
+``fingerprint`` (of the scene and the settings that the records depend on),
+``accuracy`` per level, ``records`` per level, and ``checksum``, the SHA-256 of
+the record arrays.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from . import octree
+from .errors import InputError
+
+__all__ = ["LevelRecords", "IrradianceCache", "CACHE_FORMAT_VERSION"]
+
+CACHE_FORMAT = "lbl_illum irradiance cache"
+CACHE_FORMAT_VERSION = 1
+
+
+class LevelRecords:
+    """The records of one diffuse level and their octree.
+
+    accuracy : the level's ``a`` (0: no interpolation, records answer only their own query)
+    center, half : the root cube [m]
+    """
+
+    def __init__(self, accuracy: float, center: np.ndarray, half: float, capacity: int = 1024):
+        self.accuracy = float(accuracy)
+        self.count = 0
+        self.P = np.zeros((capacity, 3), np.float64)
+        self.N = np.zeros((capacity, 3), np.float32)
+        self.E = np.zeros((capacity, 3), np.float32)
+        self.R = np.zeros(capacity, np.float32)
+        self._next = np.full(capacity, -1, np.int32)
+        self._reset_tree(np.asarray(center, np.float64), float(half), 256)
+
+    # -- storage ---------------------------------------------------------------
+    def _reset_tree(self, center, half, capacity):
+        self.node_center = np.zeros((capacity, 3), np.float64)
+        self.node_half = np.zeros(capacity, np.float64)
+        self.node_child = np.full((capacity, 8), -1, np.int32)
+        self.node_first = np.full(capacity, -1, np.int32)
+        self.node_center[0] = center
+        self.node_half[0] = half
+        self.n_nodes = 1
+
+    def _grow_records(self, needed):
+        cap = len(self.R)
+        if needed <= cap:
+            return
+        new = max(needed, 2 * cap)
+        for name in ("P", "N", "E", "R", "_next"):
+            old = getattr(self, name)
+            arr = np.zeros((new,) + old.shape[1:], old.dtype)
+            arr[: self.count] = old[: self.count]
+            setattr(self, name, arr)
+
+    def _grow_nodes(self):
+        cap = len(self.node_half)
+        new = 2 * cap
+        for name, fill in (("node_center", 0), ("node_half", 0), ("node_child", -1), ("node_first", -1)):
+            old = getattr(self, name)
+            arr = np.full((new,) + old.shape[1:], fill, old.dtype)
+            arr[:cap] = old
+            setattr(self, name, arr)
+
+    def _contains(self, points):
+        c, h = self.node_center[0], self.node_half[0]
+        return np.all(np.abs(points - c) <= h, axis=1)
+
+    def _rebuild(self, center, half):
+        """Re-insert every record under a new root cube."""
+        self._reset_tree(center, half, max(256, self.n_nodes))
+        self._next[: self.count] = -1
+        self._insert(0, self.count)
+
+    def _insert(self, start, stop):
+        while start < stop:
+            self.n_nodes, start = octree.insert_records(
+                start, stop, self.P, self.R, self.accuracy if self.accuracy > 0 else 1.0, self._next,
+                self.node_center, self.node_half, self.node_child, self.node_first, self.n_nodes)
+            if start < stop:
+                self._grow_nodes()
+
+    def add(self, P, N, R, E=None) -> np.ndarray:
+        """Append records (E defaults to zero, to be set once evaluated); return their indices."""
+        P = np.asarray(P, np.float64).reshape(-1, 3)
+        k = len(P)
+        start = self.count
+        self._grow_records(start + k)
+        self.P[start:start + k] = P
+        self.N[start:start + k] = N
+        self.R[start:start + k] = R
+        self.E[start:start + k] = 0.0 if E is None else E
+        self.count = start + k
+        if k and self.accuracy > 0:
+            if not np.all(self._contains(P)):
+                lo = np.minimum(self.P[: self.count].min(axis=0), self.node_center[0] - self.node_half[0])
+                hi = np.maximum(self.P[: self.count].max(axis=0), self.node_center[0] + self.node_half[0])
+                self._rebuild(0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) * 1.01 + 1e-9)
+            else:
+                self._insert(start, self.count)
+        return np.arange(start, start + k)
+
+    # -- queries -----------------------------------------------------------------
+    def lookup(self, P, N):
+        """Interpolated irradiance at queries (Eq. 5).
+
+        Returns ``(E, weight_sum, count)``: (n, 3) float64, (n,) float64, (n,) int32;
+        ``count == 0`` marks a query no record covers.
+        """
+        P = np.ascontiguousarray(P, np.float64).reshape(-1, 3)
+        N = np.ascontiguousarray(N, np.float64).reshape(-1, 3)
+        n = len(P)
+        out_E = np.zeros((n, 3))
+        out_w = np.zeros(n)
+        out_n = np.zeros(n, np.int32)
+        if n and self.count and self.accuracy > 0:
+            octree.lookup(P, N, self.P, self.N, self.E, self.R, self.accuracy, self._next,
+                          self.node_center, self.node_half, self.node_child, self.node_first,
+                          out_E, out_w, out_n)
+        return out_E, out_w, out_n
+
+    def arrays(self) -> dict:
+        n = self.count
+        return {"P": self.P[:n].copy(), "N": self.N[:n].copy(), "E": self.E[:n].copy(), "R": self.R[:n].copy()}
+
+    @property
+    def nbytes_per_record(self) -> float:
+        """Memory of the record arrays and their list links per record [bytes]."""
+        return float(self.P.itemsize * 3 + self.N.itemsize * 3 + self.E.itemsize * 3 + self.R.itemsize
+                     + self._next.itemsize)
+
+
+class IrradianceCache:
+    """Records of every diffuse level of one scene and one set of settings.
+
+    fingerprint : identifies the scene and the settings the records depend on
+    accuracies : ``a`` per level (``accuracies[k]``)
+    center, half : octree root cube [m]
+    """
+
+    def __init__(self, fingerprint: str, accuracies, center, half):
+        self.fingerprint = fingerprint
+        self.center = np.asarray(center, np.float64)
+        self.half = float(half)
+        self.levels = [LevelRecords(a, self.center, self.half) for a in accuracies]
+
+    @property
+    def record_counts(self) -> list[int]:
+        return [lv.count for lv in self.levels]
+
+    # -- files ---------------------------------------------------------------------
+    def _payload(self) -> dict:
+        arrays = {}
+        for k, lv in enumerate(self.levels):
+            for name, arr in lv.arrays().items():
+                arrays[f"L{k}_{name}"] = arr
+        return arrays
+
+    @staticmethod
+    def _checksum(arrays: dict) -> str:
+        h = hashlib.sha256()
+        for name in sorted(arrays):
+            h.update(name.encode())
+            h.update(np.ascontiguousarray(arrays[name]).tobytes())
+        return h.hexdigest()
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the cache atomically (temporary file in the same folder, then rename)."""
+        path = Path(path)
+        arrays = self._payload()
+        header = {
+            "format": CACHE_FORMAT, "version": CACHE_FORMAT_VERSION, "fingerprint": self.fingerprint,
+            "accuracy": [lv.accuracy for lv in self.levels], "records": self.record_counts,
+            "center": self.center.tolist(), "half": self.half, "checksum": self._checksum(arrays),
+        }
+        buf = io.BytesIO()
+        np.savez(buf, header=np.array(json.dumps(header)), **arrays)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(buf.getvalue())
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+
+    @classmethod
+    def load(cls, path: str | os.PathLike, fingerprint: str | None = None) -> "IrradianceCache":
+        """Read a cache; refuse (InputError) a damaged file or one made for other settings."""
+        name = Path(path).name
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                header = json.loads(str(data["header"]))
+                arrays = {k: data[k] for k in data.files if k != "header"}
+        except FileNotFoundError:
+            raise InputError(f"{name}: no such cache file") from None
+        except Exception as exc:  # zip, JSON and numpy errors all mean a damaged file
+            raise InputError(f"{name}: not a readable lbl_illum cache file ({type(exc).__name__})") from None
+        if not isinstance(header, dict) or header.get("format") != CACHE_FORMAT:
+            raise InputError(f"{name}: not an lbl_illum cache file")
+        if header.get("version") != CACHE_FORMAT_VERSION:
+            raise InputError(f"{name}: cache format version {header.get('version')} "
+                             f"(this program reads version {CACHE_FORMAT_VERSION})")
+        if cls._checksum(arrays) != header.get("checksum"):
+            raise InputError(f"{name}: cache file is damaged (checksum mismatch)")
+        if fingerprint is not None and header.get("fingerprint") != fingerprint:
+            raise InputError(f"{name}: cache was made for another scene or other settings "
+                             "(geometry, materials, sky, sun, accuracy, bounces, samples or ambient differ)")
+        cache = cls(header["fingerprint"], header["accuracy"], header["center"], header["half"])
+        for k, lv in enumerate(cache.levels):
+            P = arrays[f"L{k}_P"]
+            if len(P):
+                lv.add(P, arrays[f"L{k}_N"], arrays[f"L{k}_R"], arrays[f"L{k}_E"])
+        return cache

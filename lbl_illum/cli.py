@@ -1,0 +1,188 @@
+"""Command line: ``lbl-illum illuminance SCENE --points PTS -o OUT``.
+
+The command line only parses arguments and calls the library.  Bad input ends with
+one line on standard error naming the file, line or key, exit status 2 and no
+output file written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from . import __version__
+from .errors import InputError
+
+__all__ = ["main"]
+
+QUALITY_HELP = """\
+quality options (also settable under [settings] in the scene file; the command line wins):
+  accuracy  the paper's a: smaller = more records, more accurate, slower (0 = pure Monte Carlo)
+  bounces   diffuse reflections followed (Radiance's -ab is bounces + 1 for daylight)
+  samples   hemisphere rays of a first-level primary evaluation (Radiance's -ad)
+"""
+
+
+class _ProgressBar:
+    """Adapter from the integrator's progress calls to a tqdm bar on standard error."""
+
+    def __init__(self, enabled: bool):
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=None, unit="ray", unit_scale=True, delay=1.0, file=sys.stderr,
+                        disable=not enabled, leave=False, dynamic_ncols=True)
+
+    def update(self, rays: int) -> None:
+        if rays:
+            self.bar.update(rays)
+
+    def describe(self, text: str) -> None:
+        self.bar.set_description_str(text, refresh=False)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    return value
+
+
+def _number(text):
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2, like every other input error
+        raise InputError(f"{self.prog}: {message}")
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="lbl-illum", description="Illuminance in daylit rooms by the irradiance cache of "
+                     "Ward, Rubinstein & Clear (1988).")
+    parser.add_argument("--version", action="version", version=f"lbl-illum {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    p = sub.add_parser("illuminance", help="illuminance at sensor points",
+                       description="Compute the illuminance [lux] at the sensor points of a .pts file "
+                       "(x y z nx ny nz per line, scene units): direct light plus diffuse "
+                       "interreflection through the irradiance cache.",
+                       epilog=QUALITY_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT",
+                   help=".csv (x,y,z,nx,ny,nz,illuminance,direct,indirect) or .txt (one value per line)")
+    q = p.add_argument_group("quality")
+    q.add_argument("--accuracy", type=_number, metavar="A", help="the paper's a (default 0.1; 0 = no interpolation)")
+    q.add_argument("--bounces", type=_positive_int, metavar="N", help="diffuse reflections followed (default 5)")
+    q.add_argument("--samples", type=_positive_int, metavar="N",
+                   help="hemisphere samples of a first-level primary evaluation (default 1024)")
+    q.add_argument("--ambient", type=_number, metavar="E", help="illuminance [lux] at the bounce limit (default 0)")
+    q.add_argument("--min-spacing", type=_number, metavar="D", help="lower clamp on record R_i [scene units]")
+    q.add_argument("--max-spacing", type=_number, metavar="D", help="upper clamp on record R_i [scene units]")
+    q.add_argument("--no-bounce-scaling", action="store_true",
+                   help="keep a and samples the same at every level (§3.4 scaling off)")
+    q.add_argument("--seed", type=_positive_int, metavar="S", help="random seed (default 0)")
+    r = p.add_argument_group("files")
+    r.add_argument("--cache", metavar="FILE", help="read records from FILE if it exists; write all records back")
+    r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+    return parser
+
+
+def _run_illuminance(args) -> int:
+    t0 = time.perf_counter()
+    from .cache import IrradianceCache
+    from .integrator import Integrator
+    from .scene import load_scene
+    from .sensors import atomic_write_text, check_output_path, read_points, write_results
+
+    check_output_path(args.output)
+    if args.stats and Path(args.stats).parent and not Path(args.stats).parent.exists():
+        raise InputError(f"{args.stats}: folder does not exist")
+    scene = load_scene(args.scene)
+    options = scene.options.replace(
+        accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
+        min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
+        bounce_scaling=False if args.no_bounce_scaling else None)
+    points, normals = read_points(args.points, scene.unit_scale)
+    if not args.quiet:
+        for warning in scene.warnings:
+            print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+    bar = _ProgressBar(enabled=not args.quiet)
+    try:
+        integ = Integrator(scene, options, progress=bar)
+        if args.cache and Path(args.cache).exists():
+            integ.cache = IrradianceCache.load(args.cache, integ.fingerprint)
+        result = integ.compute(points, normals)
+    finally:
+        bar.close()
+    stats = result.stats
+    E = result.illuminance
+    write_results(args.output, points / scene.unit_scale, normals, E,
+                  result.direct @ _weights(), result.indirect @ _weights())
+    if args.cache:
+        integ.cache.save(args.cache)
+    seconds = time.perf_counter() - t0
+    if args.stats:
+        doc = {
+            "points": len(points),
+            "records": stats.records,
+            "new_records": stats.new_records,
+            "primary_evaluations": stats.primary_evaluations,
+            "cache_hits": stats.cache_hits,
+            "queries": stats.queries,
+            "rays": stats.rays,
+            "seconds": seconds,
+            "compute_seconds": stats.seconds,
+            "illuminance": {"mean": float(E.mean()), "min": float(E.min()), "max": float(E.max())},
+            "settings": {**options.as_dict(),
+                         "min_spacing": stats.min_spacing / scene.unit_scale,
+                         "max_spacing": stats.max_spacing / scene.unit_scale,
+                         "units": scene.units},
+        }
+        atomic_write_text(args.stats, json.dumps(doc, indent=2) + "\n")
+    if not args.quiet:
+        print(f"lbl-illum: illuminance at {len(points)} points (mean {E.mean():.4g} lux, min {E.min():.4g}, "
+              f"max {E.max():.4g}) in {seconds:.2f} s; records per level {stats.records} "
+              f"({stats.primary_evaluations} new); {stats.rays:,} rays -> {args.output}", file=sys.stderr)
+    return 0
+
+
+def _weights():
+    from .photometry import luminance_weights
+
+    return luminance_weights()
+
+
+def main(argv=None) -> int:
+    parser = _build_parser()
+    try:
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help()
+            return 2
+        if args.command == "illuminance":
+            return _run_illuminance(args)
+        raise InputError(f"lbl-illum: unknown command {args.command!r}")
+    except InputError as exc:
+        print(f"lbl-illum: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("lbl-illum: interrupted", file=sys.stderr)
+        return 130
+    except OSError as exc:
+        print(f"lbl-illum: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

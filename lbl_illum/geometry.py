@@ -1,0 +1,454 @@
+"""Scene geometry as one triangle soup in metres, with a material per triangle.
+
+Loaders for geometry files (through trimesh) and for the scene file's primitives
+(sphere, box, polygon, rectangle) are added below the container.
+"""
+
+from __future__ import annotations
+
+import difflib
+import io
+import re
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from .errors import InputError, check_keys, get_number, get_vector
+
+__all__ = [
+    "Triangles", "MeshPart", "Shape", "SHAPE_KEYS", "SPHERE_SUBDIVISIONS", "SPHERE_MAX_DEVIATION",
+    "PLANAR_TOLERANCE", "load_mesh_file", "shape_from_table", "sphere_triangles", "box_triangles",
+    "rectangle_triangles", "polygon_triangles", "triangulate_polygon", "degenerate_mask",
+    "duplicate_mask",
+]
+
+
+@dataclass
+class Triangles:
+    """All triangles of a scene.
+
+    vertices : (T, 3, 3) float64 — corner positions [m]
+    material : (T,) int32 — index into ``Scene.materials``
+    sphere : (T,) int32 — index of the sphere primitive a triangle tessellates, or -1
+    sphere_center : (S, 3) float64 [m];  sphere_radius : (S,) float64 [m]
+    """
+
+    vertices: np.ndarray
+    material: np.ndarray
+    sphere: np.ndarray
+    sphere_center: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    sphere_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def __len__(self) -> int:
+        return int(self.vertices.shape[0])
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(T, 3) unit face normals by the right-hand rule over the corners [-]."""
+        v = self.vertices
+        n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return n / np.where(length > 0, length, 1.0)
+
+    @property
+    def areas(self) -> np.ndarray:
+        """(T,) triangle areas [m²]."""
+        v = self.vertices
+        return 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) min and max corner of all triangles [m]."""
+        flat = self.vertices.reshape(-1, 3)
+        return np.stack([flat.min(axis=0), flat.max(axis=0)])
+
+
+# ---------------------------------------------------------------------------
+# Geometry files (through trimesh)
+# ---------------------------------------------------------------------------
+
+#: Name of the material library synthesised for OBJ files (see :func:`_read_obj`).
+_NAMES_MTL = "__lbl_illum_usemtl_names__.mtl"
+
+
+@dataclass
+class MeshPart:
+    """One sub-mesh of a geometry file, with the names a scene file may map to a material.
+
+    name : trimesh's geometry name.  OBJ (loaded with ``split_groups``): ``GROUP_MATERIAL``
+        when the file uses several ``usemtl`` names and the faces follow a ``g`` line,
+        otherwise the group, the ``usemtl`` name, the ``o`` object or the file name.
+        glTF: the mesh name.  PLY, STL, OFF: the file name.
+    node : the scene-graph node (glTF node name; equal to ``name`` for the other formats)
+    group : the OBJ ``g`` group (or ``o`` object) recovered from ``name`` (None when there is none)
+    material : the OBJ ``usemtl`` name or the glTF material name (None when there is none)
+    vertices : (T, 3, 3) float64 corners [m], scene-graph transform applied
+    """
+
+    name: str
+    node: str
+    group: str | None
+    material: str | None
+    vertices: np.ndarray
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """Names a ``materials`` table may use for this part, most specific first."""
+        names = (self.node, self.name, self.group, self.material)
+        return tuple(dict.fromkeys(n for n in names if n))
+
+    @property
+    def label(self) -> str:
+        """The part for messages, e.g. ``'A_Floor' (group 'A', material 'Floor')``."""
+        extra = [f"{what} '{n}'" for what, n in (("node", self.node), ("group", self.group),
+                                                   ("material", self.material))
+                 if n and n != self.name]
+        return f"'{self.name}'" + (f" ({', '.join(extra)})" if extra else "")
+
+
+def load_mesh_file(path: Path, where: str, scale: float = 1.0) -> list[MeshPart]:
+    """The triangles of a geometry file as named parts, in metres.
+
+    ``scale`` is metres per file unit.  Any format trimesh reads (OBJ, PLY, STL, glTF/GLB,
+    OFF, ...) is accepted; faces are neither merged nor reordered (``process=False``,
+    ``maintain_order=True``) and scene-graph transforms are applied.  A missing or
+    unreadable file, or one without triangles, is an :class:`InputError` starting with
+    ``where``.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{where}: no such file ({path})")
+    try:
+        scene = _load_trimesh_scene(path)
+    except InputError:
+        raise
+    except Exception as exc:  # trimesh raises anything from ValueError to KeyError
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{where}: cannot read the file ({reason})") from None
+    parts = _scene_parts(scene, scale, obj_name=path.name if path.suffix.lower() == ".obj" else None)
+    if not parts:
+        raise InputError(f"{where}: the file contains no triangles")
+    return parts
+
+
+def _load_trimesh_scene(path: Path):
+    """``trimesh.Scene`` of a file; OBJ files go through :func:`_read_obj`."""
+    import trimesh
+
+    if path.suffix.lower() == ".obj":
+        return _read_obj(path)
+    return trimesh.load(str(path), force="scene", process=False, maintain_order=True)
+
+
+def _read_obj(path: Path):
+    """Load an OBJ keeping every ``usemtl`` name and ``g`` group.
+
+    trimesh splits an OBJ at every ``usemtl`` but only remembers the name when the
+    ``.mtl`` library loads, so a library naming every ``usemtl`` is synthesised (the
+    scene file defines the materials; the ``.mtl`` colours are not used).  Groups
+    become separate sub-meshes (``split_groups``); ``group_material`` stays on, since
+    without it trimesh merges a group's faces of different materials.
+    """
+    import trimesh
+
+    text = path.read_bytes().decode("utf-8", errors="replace")
+    names = list(dict.fromkeys(" ".join(m.split()) for m in
+                               re.findall(r"^[ \t]*usemtl[ \t]+(.+?)[ \t]*\r?$", text, flags=re.M)))
+    resolver = {}
+    if names:
+        text = f"mtllib {_NAMES_MTL}\n" + text
+        resolver[_NAMES_MTL] = "".join(f"newmtl {n}\n" for n in names).encode()
+    stream = io.BytesIO(text.encode())
+    stream.name = path.name
+    return trimesh.load(stream, file_type="obj", resolver=resolver, force="scene", process=False,
+                        maintain_order=True, split_groups=True, group_material=True)
+
+
+def _scene_parts(scene, scale: float, obj_name: str | None) -> list[MeshPart]:
+    """The triangle meshes of a trimesh scene as :class:`MeshPart` s in metres.
+
+    ``obj_name`` is the file name of an OBJ file (None for other formats).
+    """
+    import trimesh
+
+    parts = []
+    for node in scene.graph.nodes_geometry:
+        transform, geom_name = scene.graph[node]
+        mesh = scene.geometry[geom_name]
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            continue
+        tri = np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces, dtype=np.int64)]
+        tri = _transform(tri, np.asarray(transform, dtype=np.float64)) * scale
+        material = getattr(getattr(mesh.visual, "material", None), "name", None) or None
+        group = _obj_group(str(geom_name), material, obj_name) if obj_name else None
+        parts.append(MeshPart(str(geom_name), str(node), group, material, tri))
+    return parts
+
+
+def _transform(tri: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """Apply a 4×4 affine transform to (T, 3, 3) corners, keeping outward winding."""
+    out = tri @ matrix[:3, :3].T + matrix[:3, 3]
+    if np.linalg.det(matrix[:3, :3]) < 0:       # a mirror flips the winding: swap two corners
+        out = out[:, [0, 2, 1]]
+    return out
+
+
+def _obj_group(name: str, material: str | None, file_name: str) -> str | None:
+    """The ``g`` group (or ``o`` object) in a trimesh OBJ sub-mesh name ``GROUP_MATERIAL``."""
+    if material and name.endswith("_" + material) and len(name) > len(material) + 1:
+        return name[: -len(material) - 1]
+    if name in (material, file_name, "geometry"):
+        return None
+    return name
+
+
+# ---------------------------------------------------------------------------
+# Primitives of the scene file
+# ---------------------------------------------------------------------------
+
+#: Icosphere subdivision level of sphere primitives: 20·4⁶ = 81,920 triangles.
+SPHERE_SUBDIVISIONS = 6
+#: Largest distance between the facets and the true sphere, as a fraction of the radius,
+#: measured (tests/test_geometry.py) as 1 − min over facets of the plane's distance from
+#: the centre: 7.12e-5.  The edge-midpoint deviation r(1 − cos(θ_max/2)), θ_max = 1.1845°
+#: the largest edge angle, is smaller, 5.34e-5; subdivision 5 would give 2.85e-4.
+SPHERE_MAX_DEVIATION = 7.2e-5
+#: Polygons whose vertices leave their mean plane by more than this fraction of the
+#: polygon's diameter are refused as non-planar.
+PLANAR_TOLERANCE = 1e-4
+#: Relative size below which a cross product counts as zero (collinear corners).
+_EPS = 1e-12
+
+#: Keys of each primitive (all required).
+SHAPE_KEYS = {
+    "sphere": ("center", "radius"),
+    "box": ("center", "size"),
+    "polygon": ("vertices",),
+    "rectangle": ("origin", "u", "v"),
+}
+
+
+@dataclass
+class Shape:
+    """Triangles of one primitive [m]; spheres also keep their true centre [m] and radius [m]."""
+
+    vertices: np.ndarray
+    sphere_center: np.ndarray | None = None
+    sphere_radius: float | None = None
+
+
+def shape_from_table(table: Mapping[str, Any], where: str, scale: float = 1.0,
+                     extra_keys: tuple[str, ...] = ()) -> Shape:
+    """The primitive of a ``[[geometry]]`` table with a ``shape`` key.
+
+    Lengths are in scene units, multiplied by ``scale`` (metres per unit).  Keys other
+    than ``shape``, the shape's own keys and ``extra_keys`` are refused.
+    """
+    kind = table.get("shape")
+    if kind not in SHAPE_KEYS:
+        near = difflib.get_close_matches(str(kind), SHAPE_KEYS, n=1)
+        hint = f" (did you mean '{near[0]}'?)" if near else f" (valid: {', '.join(SHAPE_KEYS)})"
+        raise InputError(f"{where}: unknown shape {kind!r}{hint}")
+    check_keys(table, ("shape",) + SHAPE_KEYS[kind] + tuple(extra_keys), where, required=SHAPE_KEYS[kind])
+    if kind == "sphere":
+        center = np.array(get_vector(table, "center", where)) * scale
+        radius = get_number(table, "radius", where, minimum=0.0, min_inclusive=False) * scale
+        return Shape(sphere_triangles(center, radius), center, radius)
+    if kind == "box":
+        size = np.array(get_vector(table, "size", where))
+        if np.any(size <= 0):
+            raise InputError(f"{where}: 'size' must be > 0 along every axis, got {table['size']!r}")
+        return Shape(box_triangles(np.array(get_vector(table, "center", where)) * scale, size * scale))
+    if kind == "rectangle":
+        origin, u, v = (np.array(get_vector(table, k, where)) * scale for k in ("origin", "u", "v"))
+        return Shape(rectangle_triangles(origin, u, v, where))
+    return Shape(polygon_triangles(_get_points(table, "vertices", where) * scale, where))
+
+
+def _get_points(table: Mapping[str, Any], key: str, where: str) -> np.ndarray:
+    """(n, 3) array from a list of ``[x, y, z]`` in ``table[key]``, every number finite."""
+    value = table[key]
+    if not isinstance(value, (list, tuple)):
+        raise InputError(f"{where}: '{key}' must be a list of [x, y, z] points, got {value!r}")
+    points = [get_vector({f"{key}[{i}]": p}, f"{key}[{i}]", where) for i, p in enumerate(value)]
+    return np.array(points, dtype=np.float64).reshape(-1, 3)
+
+
+@lru_cache(maxsize=1)
+def _unit_icosphere() -> np.ndarray:
+    """(81920, 3, 3) corners of the unit icosphere, outward winding, vertices on the sphere."""
+    import trimesh
+
+    mesh = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=1.0)
+    tri = np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces)]
+    tri.setflags(write=False)
+    return tri
+
+
+def sphere_triangles(center, radius: float) -> np.ndarray:
+    """(81920, 3, 3) triangles inscribed in the sphere (``center``, ``radius``), normals outward.
+
+    Vertices lie on the sphere; facets are within ``SPHERE_MAX_DEVIATION``·radius of it.
+    Units are those of the arguments (metres in the scene).
+    """
+    return np.asarray(center, dtype=np.float64) + float(radius) * _unit_icosphere()
+
+
+#: Corner k of a box is at center + size/2 · _BOX_SIGNS[k] (bit 0: x, bit 1: y, bit 2: z).
+_BOX_SIGNS = np.array([[1 if k & b else -1 for b in (1, 2, 4)] for k in range(8)], dtype=np.float64)
+#: Two outward-wound triangles per face: -x, +x, -y, +y, -z, +z.
+_BOX_FACES = np.array([[0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5], [0, 1, 5], [0, 5, 4],
+                       [2, 6, 7], [2, 7, 3], [0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6]])
+
+
+def box_triangles(center, size) -> np.ndarray:
+    """(12, 3, 3) triangles of an axis-aligned box, normals outward (units of the arguments)."""
+    corners = np.asarray(center, dtype=np.float64) + 0.5 * np.asarray(size, dtype=np.float64) * _BOX_SIGNS
+    return corners[_BOX_FACES]
+
+
+def rectangle_triangles(origin, u, v, where: str = "rectangle") -> np.ndarray:
+    """(2, 3, 3) triangles of the parallelogram origin + s·u + t·v, s, t ∈ [0, 1].
+
+    The normal is along u × v.  Units are those of the arguments.
+    """
+    o, u, v = (np.asarray(a, dtype=np.float64) for a in (origin, u, v))
+    if np.linalg.norm(np.cross(u, v)) <= _EPS * np.linalg.norm(u) * np.linalg.norm(v) or not (
+            np.any(u) and np.any(v)):
+        raise InputError(f"{where}: 'u' and 'v' span no area (zero or parallel)")
+    return np.array([[o, o + u, o + u + v], [o, o + u + v, o + v]])
+
+
+def polygon_triangles(points, where: str = "polygon") -> np.ndarray:
+    """(n-2 or fewer, 3, 3) triangles of a planar polygon given by its (n, 3) vertices.
+
+    The polygon may be non-convex; triangles are wound like the vertex order (normal by
+    the right-hand rule).  Fewer than 3 vertices, zero area, vertices off the plane by
+    more than ``PLANAR_TOLERANCE`` of the diameter, and self-intersection are refused.
+    Units are those of ``points``.
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if len(p) < 3:
+        raise InputError(f"{where}: a polygon needs at least 3 vertices, got {len(p)}")
+    diameter = float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
+    area_vector = 0.5 * np.sum(np.cross(p, np.roll(p, -1, axis=0)), axis=0)     # Newell
+    area = float(np.linalg.norm(area_vector))
+    if area <= _EPS * diameter * diameter:
+        raise InputError(f"{where}: the polygon has zero area")
+    normal = area_vector / area
+    off = np.abs((p - p.mean(axis=0)) @ normal)
+    if off.max() > PLANAR_TOLERANCE * diameter:
+        k = int(off.argmax())
+        raise InputError(f"{where}: the polygon is not planar (vertex {k} is {off[k]:.3g} off its plane)")
+    u = np.cross(normal, np.eye(3)[int(np.argmin(np.abs(normal)))])
+    u /= np.linalg.norm(u)
+    xy = np.stack([p @ u, p @ np.cross(normal, u)], axis=1)     # counter-clockwise about normal
+    try:
+        index = triangulate_polygon(xy)
+    except ValueError:
+        index = np.zeros((0, 3), dtype=np.int64)
+    tri = p[index]
+    tri_area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    if abs(tri_area - area) > 1e-9 * area:
+        raise InputError(f"{where}: the polygon cannot be triangulated (do its edges cross?)")
+    return tri
+
+
+def triangulate_polygon(xy: np.ndarray) -> np.ndarray:
+    """(m, 3) vertex indices triangulating a simple counter-clockwise 2-D polygon (ear clipping).
+
+    Collinear vertices are skipped (m may be below n-2); raises ValueError when no ear
+    is left (self-intersecting or clockwise input).
+    """
+    xy = np.asarray(xy, dtype=np.float64)
+    scale = float(np.ptp(xy, axis=0).max()) if len(xy) else 0.0
+    eps = _EPS * scale * scale
+    ring, out, i, misses = list(range(len(xy))), [], 0, 0
+    while len(ring) > 3:
+        n = len(ring)
+        a, b, c = ring[(i - 1) % n], ring[i % n], ring[(i + 1) % n]
+        cross = _cross2(xy[a], xy[b], xy[c])
+        if abs(cross) <= eps:                       # straight (or spike): drop without a triangle
+            ring.pop(i % n)
+            misses = 0
+        elif cross > eps and not _blocked(xy, ring, a, b, c, eps):
+            out.append((a, b, c))
+            ring.pop(i % n)
+            misses = 0
+        else:
+            i, misses = i + 1, misses + 1
+            if misses > n:
+                raise ValueError("no ear: the polygon is self-intersecting or clockwise")
+    if len(ring) == 3 and _cross2(*xy[ring]) > eps:
+        out.append(tuple(ring))
+    return np.array(out, dtype=np.int64).reshape(-1, 3)
+
+
+def _cross2(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
+    """z of (b - a) × (c - b): positive when a, b, c turn counter-clockwise."""
+    return float((b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]))
+
+
+def _blocked(xy: np.ndarray, ring: list[int], a: int, b: int, c: int, eps: float) -> bool:
+    """True when another ring vertex lies in (or on) the triangle a, b, c."""
+    others = np.array([k for k in ring if k not in (a, b, c)], dtype=np.int64)
+    q = xy[others]
+    corners = xy[[a, b, c]]
+    q = q[~np.any(np.all(q[:, None, :] == corners[None, :, :], axis=2), axis=1)]
+    if len(q) == 0:
+        return False
+    inside = np.ones(len(q), dtype=bool)
+    for p0, p1 in ((xy[a], xy[b]), (xy[b], xy[c]), (xy[c], xy[a])):
+        inside &= (p1[0] - p0[0]) * (q[:, 1] - p0[1]) - (p1[1] - p0[1]) * (q[:, 0] - p0[0]) >= -eps
+    return bool(inside.any())
+
+
+# ---------------------------------------------------------------------------
+# Clean-up of the assembled triangles
+# ---------------------------------------------------------------------------
+
+def degenerate_mask(vertices: np.ndarray) -> np.ndarray:
+    """(T,) bool: triangles of zero area (|cross| ≤ 1e-12 · longest edge², any length unit)."""
+    v = np.asarray(vertices, dtype=np.float64)
+    cross = np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+    edges = np.stack([np.linalg.norm(v[:, k] - v[:, (k + 1) % 3], axis=1) for k in range(3)], axis=1)
+    return cross <= _EPS * edges.max(axis=1, initial=0.0) ** 2
+
+
+def duplicate_mask(vertices: np.ndarray) -> np.ndarray:
+    """(T,) bool: triangles whose three corners (in any order) equal an earlier triangle's.
+
+    A 64-bit hash independent of the corner order picks the candidates (equal hashes);
+    only those are compared exactly, corners in lexicographic order.
+    """
+    v = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64) + 0.0)     # -0.0 → 0.0
+    mask = np.zeros(len(v), dtype=bool)
+    if len(v) < 2:
+        return mask
+    with np.errstate(over="ignore"):
+        corner = (v.view(np.uint64) * _HASH_MULTIPLIERS).sum(axis=2)           # (T, 3), wraps mod 2**64
+        corner ^= corner >> np.uint64(31)
+        corner *= _HASH_MIX
+        corner ^= corner >> np.uint64(29)
+        hashed = corner.sum(axis=1)                                             # symmetric in the corners
+    order = np.argsort(hashed, kind="stable")
+    same = hashed[order[1:]] == hashed[order[:-1]]
+    candidate = np.zeros(len(v), dtype=bool)
+    candidate[order[1:][same]] = candidate[order[:-1][same]] = True
+    index = np.flatnonzero(candidate)
+    if len(index):
+        c = v[index]
+        for axis in (2, 1, 0):                                  # lexicographic order of the corners
+            c = np.take_along_axis(c, np.argsort(c[:, :, axis], axis=1, kind="stable")[:, :, None], axis=1)
+        _, first = np.unique(c.reshape(len(c), 9), axis=0, return_index=True)
+        mask[index] = True
+        mask[index[first]] = False
+    return mask
+
+
+#: Odd 64-bit constants of the triangle hash in :func:`duplicate_mask`.
+_HASH_MULTIPLIERS = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
+_HASH_MIX = np.uint64(0xFF51AFD7ED558CCD)

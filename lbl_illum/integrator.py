@@ -1,0 +1,519 @@
+"""Wavefront irradiance-cache integrator (the paper's §3 and §3.4; DESIGN.md §3).
+
+Illuminance at a query point P with normal N is the direct part (sun and light
+surfaces, :mod:`lbl_illum.direct`) plus the indirect part, interpolated from the
+records of diffuse level 0.  A record of level k integrates the hemisphere by Eq. 2;
+its rays end
+
+* in the sky or ground glow: luminance of the sky model, times the transmittance of
+  any glass crossed;
+* on a ``light`` surface (or the sun) reached directly or through glass: nothing —
+  the direct calculation counted it (§5);  reached after a specular reflection:
+  its luminance;
+* on a diffuse surface at Q: ρ/π (E_direct(Q) + E_{k+1}(Q)) where E_{k+1} is
+  interpolated from level k+1 — or, at the bounce limit k = bounces, ρ/π · ambient;
+* on glass or a mirror: the ray continues specularly (glass chooses reflection or
+  transmission at random in proportion to their sizes, keeping the estimate unbiased).
+
+**Order of work.**  Where a record goes, and its R_i, depend only on geometry; its
+value needs the level below.  So the levels are *placed* top-down and *evaluated*
+bottom-up:
+
+1. Placement of level k, coarse to fine: look the queries up; among those no record
+   covers, pick one per cell of a grid (cells keyed by position and dominant normal
+   axis), halving the cell each pass; trace all their hemispheres in one batch; make
+   them records (P, N, R_i = harmonic mean ray length, clamped); look the rest up
+   again; repeat until every query is covered.  The diffuse hits of the new records'
+   rays are the queries of level k+1.
+2. Evaluation from the deepest level up: direct light at the hits (one batch of
+   shadow rays), the level below interpolated from its *complete* record set, the
+   records' values by Eq. 2.
+3. Every query is answered from the complete record set of its level.
+
+So results do not depend on the order of the queries, and a rerun from a saved cache
+is identical.  Python loops only over levels and passes; rays, records and queries are
+arrays.
+
+**Record spacing.**  R_i is clamped to [min_spacing, max_spacing + δ(P_i)], δ being
+the distance from P_i to the box around the query points: far from every query, a
+record is seen under a small solid angle and may grow in proportion (a level-of-detail
+rule of this project; it keeps a kilometre-wide ground from costing records, where a
+limit tied to the scene's bounding box makes records as large as rooms).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .cache import IrradianceCache, LevelRecords
+from .direct import DirectLight
+from .hemisphere import cell_counts, cosine_directions, stratified_directions
+from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
+from .options import Options
+from .photometry import luminance
+from .raycast import Tracer
+from .scene import Scene
+
+__all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint"]
+
+#: Specular (glass, mirror) interactions a hemisphere ray may follow.
+MAX_SPECULAR_DEPTH = 8
+#: Light-surface shadow rays per query point (hemisphere hits use one).
+QUERY_LIGHT_SAMPLES = 16
+#: Record spacing defaults: max = D / 2, min = max / 64, D the extent of the queries.
+MAX_SPACING_FRACTION = 0.5
+SPACING_RATIO = 64.0
+#: Passes of placement before all remaining uncovered queries are taken at once.
+MAX_PASSES = 64
+
+# random-stream tags
+_TAG_HEMISPHERE, _TAG_DIRECT_HITS, _TAG_DIRECT_QUERIES, _TAG_PROBE = 1, 2, 3, 4
+
+
+@dataclass
+class RunStats:
+    """What a calculation did."""
+
+    records: list = field(default_factory=list)          # records per level, after the run
+    new_records: list = field(default_factory=list)      # primary evaluations per level, this run
+    queries: list = field(default_factory=list)          # cache queries per level
+    cache_hits: int = 0                                  # queries answered by records that existed
+    rays: int = 0
+    seconds: float = 0.0
+    min_spacing: float = 0.0                             # [m]
+    max_spacing: float = 0.0                             # [m]
+
+    @property
+    def primary_evaluations(self) -> int:
+        return int(sum(self.new_records))
+
+
+@dataclass
+class IlluminanceResult:
+    """Illuminance at the query points.
+
+    rgb, direct, indirect : (n, 3) [lux];  illuminance : (n,) photometric [lux]
+    """
+
+    rgb: np.ndarray
+    direct: np.ndarray
+    indirect: np.ndarray
+    stats: RunStats
+
+    @property
+    def illuminance(self) -> np.ndarray:
+        return luminance(self.rgb)
+
+
+def scene_fingerprint(scene: Scene, options: Options) -> str:
+    """Hash of everything the records depend on (not the seed, spacing or query points)."""
+    h = hashlib.sha256()
+    tri = scene.triangles
+    for arr in (tri.vertices, tri.material, tri.sphere, tri.sphere_center, tri.sphere_radius):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    desc = {
+        "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance) for m in scene.materials],
+        "sky": (scene.sky.name, scene.sky.horizontal_illuminance, scene.sky.ground_reflectance,
+                scene.sky.ground_luminance),
+        "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,
+                                               scene.sun.direct_normal_illuminance),
+        "options": (options.accuracy, options.bounces, options.samples, options.ambient, options.bounce_scaling),
+    }
+    h.update(json.dumps(desc, sort_keys=True).encode())
+    return h.hexdigest()
+
+
+@dataclass
+class _Pending:
+    """Records of one level made in this run and waiting for their values."""
+
+    records: list = field(default_factory=list)     # record indices per pass
+    known: list = field(default_factory=list)       # (r, 3) radiance sums known at trace time
+    samples: list = field(default_factory=list)     # rays per record of each pass
+    hit_P: list = field(default_factory=list)       # diffuse hits: the next level's queries
+    hit_Ns: list = field(default_factory=list)
+    hit_Ng: list = field(default_factory=list)
+    hit_weight: list = field(default_factory=list)  # throughput · ρ / π
+    hit_owner: list = field(default_factory=list)   # index into the concatenated records
+
+    def cat(self, name, width=3, dtype=np.float64):
+        """The parts of ``name`` as one array (concatenated once, then kept)."""
+        parts = getattr(self, name)
+        if len(parts) != 1:
+            joined = np.concatenate(parts) if parts else np.zeros((0, width) if width else 0, dtype)
+            setattr(self, name, [joined])
+        return getattr(self, name)[0]
+
+
+class Integrator:
+    """Computes illuminance for one scene and one set of options, with a cache.
+
+    ``progress`` (optional) receives ``update(rays)`` after every batch of rays and
+    ``describe(text)`` at every stage.
+    """
+
+    def __init__(self, scene: Scene, options: Options | None = None, cache: IrradianceCache | None = None,
+                 progress=None):
+        self.scene = scene
+        self.options = options or scene.options
+        self.materials: MaterialTable = scene.material_table
+        self.tracer = Tracer(scene.triangles, self.materials.kind, self.materials.transmittance)
+        self.direct = DirectLight(self.tracer, self.materials, scene.sun)
+        self.sky = scene.sky
+        self.sun = self.direct.sun
+        self.fingerprint = scene_fingerprint(scene, self.options)
+        self.progress = progress
+        B = self.options.bounces
+        self.accuracies = [self.options.level_accuracy(k) for k in range(B + 1)]
+        self.cache = cache
+        if cache is not None and cache.fingerprint != self.fingerprint:
+            raise ValueError("cache was made for another scene or other settings")
+
+    # -- bookkeeping ----------------------------------------------------------------
+    def _tick(self, text=None):
+        if self.progress is not None:
+            if text:
+                self.progress.describe(text)
+            self.progress.update(self.tracer.rays_traced - self._rays_reported)
+        self._rays_reported = self.tracer.rays_traced
+
+    def _rng(self, *key):
+        return np.random.default_rng(np.random.SeedSequence([self.options.seed, *key]))
+
+    def _level_active(self, k: int) -> bool:
+        """Whether records of level k can be non-zero (else they are never made)."""
+        sky_light = not self.sky.is_dark
+        if k == self.options.bounces:
+            return sky_light or self.options.ambient > 0
+        return sky_light or not self.direct.is_dark or self.options.ambient > 0
+
+    def _new_cache(self, points) -> IrradianceCache:
+        lo = np.minimum(self.scene.triangles.bounds[0], points.min(axis=0))
+        hi = np.maximum(self.scene.triangles.bounds[1], points.max(axis=0))
+        half = 0.5 * float(np.max(hi - lo)) * 1.01 + 1e-9
+        return IrradianceCache(self.fingerprint, self.accuracies, 0.5 * (lo + hi), half)
+
+    # -- spacing ----------------------------------------------------------------------
+    def default_spacing(self, points, normals) -> tuple[float, float]:
+        """(min, max) record spacing [m] from the extent of the queries.
+
+        D = max(diagonal of the queries' box, 2 × median distance from the queries to
+        the surfaces they see); max = D/2, min = max/64 (the ratio of Radiance's
+        limits).  The scene's bounding box plays no part.
+        """
+        diag = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+        rng = self._rng(_TAG_PROBE)
+        pick = rng.choice(len(points), size=min(len(points), 256), replace=False)
+        o = self.tracer.offset(points[pick], normals[pick])
+        o = np.repeat(o, 16, axis=0)
+        d = cosine_directions(np.repeat(normals[pick], 16, axis=0), rng)
+        t = self.tracer.intersect(o, d).t
+        t = t[np.isfinite(t)]
+        probe = float(np.median(t)) if len(t) else 0.0
+        D = max(diag, 2.0 * probe)
+        if D <= 0.0:
+            D = 1.0
+        max_spacing = MAX_SPACING_FRACTION * D
+        return max_spacing / SPACING_RATIO, max_spacing
+
+    # -- hemisphere rays ----------------------------------------------------------------
+    def trace_paths(self, origins, directions, rng):
+        """Follow rays through specular surfaces to the sky, a light or a diffuse surface.
+
+        Returns ``(first_t, radiance, hits)``: (n,) first-hit distance (inf to the sky),
+        (n, 3) radiance already known (sky, lights seen by reflection), and the diffuse
+        hits as a dict of arrays ``ray, P, Ns, Ng, weight`` (weight = throughput ρ/π).
+        """
+        mats = self.materials
+        n = len(origins)
+        radiance = np.zeros((n, 3))
+        first_t = np.full(n, np.inf)
+        ray = np.arange(n)
+        o = np.asarray(origins, np.float64)
+        d = np.asarray(directions, np.float64)
+        through = np.ones((n, 3))
+        reflected = np.zeros(n, bool)
+        out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
+        for depth in range(MAX_SPECULAR_DEPTH + 1):
+            if len(ray) == 0:
+                break
+            hits = self.tracer.intersect(o, d)
+            if depth == 0:
+                first_t[:] = hits.t
+            esc = np.flatnonzero(~hits.hit)
+            if len(esc):
+                L = self.sky.luminance(d[esc])
+                if self.sun is not None:
+                    sun_seen = reflected[esc] & self.sun.within_disk(d[esc])
+                    L[sun_seen] += self.sun.luminance
+                radiance[ray[esc]] += through[esc] * L
+            hit = np.flatnonzero(hits.hit)
+            if len(hit) == 0:
+                break
+            P, Ng, Ns = self.tracer.surface(o, d, hits, hit)
+            mat = self.scene.triangles.material[hits.prim[hit]]
+            kind = mats.kind[mat]
+            # diffuse surfaces end the path
+            dif = np.flatnonzero((kind == DIFFUSE) & (mats.reflectance[mat].max(axis=1) > 0.0))
+            if len(dif):
+                out["ray"].append(ray[hit[dif]])
+                out["P"].append(P[dif])
+                out["Ns"].append(Ns[dif])
+                out["Ng"].append(Ng[dif])
+                out["weight"].append(through[hit[dif]] * mats.reflectance[mat[dif]] / np.pi)
+            lit = np.flatnonzero((kind == LIGHT) & reflected[hit])
+            if len(lit):
+                radiance[ray[hit[lit]]] += through[hit[lit]] * mats.luminance[mat[lit]]
+            # specular surfaces continue
+            spec = np.flatnonzero((kind == MIRROR) | (kind == GLASS))
+            if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
+                break
+            s_hit = hit[spec]
+            s_mat = mat[spec]
+            rho = mats.reflectance[s_mat]
+            tau = mats.transmittance[s_mat]
+            p_t = luminance(tau)
+            p_r = luminance(rho)
+            total = p_t + p_r
+            keep = total > 0
+            transmit = rng.random(len(spec)) * np.where(keep, total, 1.0) < p_t
+            ds = d[s_hit]
+            ns = Ns[spec]
+            refl_dir = ds - 2.0 * np.einsum("ij,ij->i", ds, ns)[:, None] * ns
+            new_d = np.where(transmit[:, None], ds, refl_dir)
+            side = np.where(transmit[:, None], -Ng[spec], Ng[spec])
+            safe = np.where(keep, total, 1.0)[:, None]
+            factor = np.where(transmit[:, None], tau / np.maximum(p_t, 1e-300)[:, None],
+                              rho / np.maximum(p_r, 1e-300)[:, None]) * safe
+            new_through = through[s_hit] * factor
+            alive = keep & (new_through.max(axis=1) > 0.0)
+            ray = ray[s_hit][alive]
+            o = self.tracer.offset(P[spec][alive], side[alive])
+            d = new_d[alive]
+            through = new_through[alive]
+            reflected = (reflected[s_hit] | ~transmit)[alive]
+        hits_out = {k: (np.concatenate(v) if v else None) for k, v in out.items()}
+        if hits_out["ray"] is None:
+            hits_out = {"ray": np.zeros(0, np.int64), "P": np.zeros((0, 3)), "Ns": np.zeros((0, 3)),
+                        "Ng": np.zeros((0, 3)), "weight": np.zeros((0, 3))}
+        return first_t, radiance, hits_out
+
+    # -- placement (top-down) ---------------------------------------------------------
+    def _evaluate_hemispheres(self, k, P, Ns, Ng, pending: _Pending, rng):
+        """Trace the hemispheres of new records at (P, Ns); return their R_i (unclamped)."""
+        samples = self.options.level_samples(k)
+        m, n = cell_counts(samples)
+        S = m * n
+        r = len(P)
+        dirs = stratified_directions(Ns, m, n, rng).reshape(-1, 3)
+        origins = np.repeat(self.tracer.offset(P, Ng), S, axis=0)
+        first_t, radiance, hits = self.trace_paths(origins, dirs, rng)
+        owner_local = hits["ray"] // S
+        if k == self.options.bounces:
+            if self.options.ambient > 0 and len(owner_local):
+                np.add.at(radiance, hits["ray"], hits["weight"] * self.options.ambient)
+        else:
+            base = sum(len(x) for x in pending.records)
+            pending.hit_P.append(hits["P"])
+            pending.hit_Ns.append(hits["Ns"])
+            pending.hit_Ng.append(hits["Ng"])
+            pending.hit_weight.append(hits["weight"])
+            pending.hit_owner.append(owner_local + base)
+        pending.known.append(radiance.reshape(r, S, 3).sum(axis=1))
+        pending.samples.append(np.full(r, S))
+        inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
+        with np.errstate(divide="ignore"):
+            return np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
+
+    def _clamp_radius(self, R0, P):
+        lo_box, hi_box = self._roi
+        outside = np.maximum(0.0, np.maximum(lo_box - P, P - hi_box))
+        far = np.linalg.norm(outside, axis=1)
+        return np.clip(R0, self.min_spacing, self.max_spacing + far)
+
+    def _distance_band(self, P):
+        """Power-of-two band of the distance outside the query box (0 inside it)."""
+        lo_box, hi_box = self._roi
+        far = np.linalg.norm(np.maximum(0.0, np.maximum(lo_box - P, P - hi_box)), axis=1)
+        return np.ceil(np.log2(1.0 + far / self.max_spacing)).astype(np.int64)
+
+    @staticmethod
+    def _spread_subset(P, N, band, cell):
+        """Indices of one query per grid cell and dominant normal direction.
+
+        The cell side is ``cell`` inside the query box and doubles with each
+        power-of-two ``band`` of distance outside it, as the records' spacing limit
+        grows.  Cells are hashed to one 64-bit key (a collision only merges two cells
+        for one pass; the next pass picks the other).
+        """
+        axis = np.argmax(np.abs(N), axis=1)
+        sign = np.take_along_axis(N, axis[:, None], axis=1)[:, 0] > 0
+        size = cell * np.exp2(band.astype(np.float64))
+        ijk = np.floor(P / size[:, None]).astype(np.int64)
+        key = (ijk[:, 0] * np.int64(73856093)) ^ (ijk[:, 1] * np.int64(19349663)) ^ (ijk[:, 2] * np.int64(83492791))
+        key = key * np.int64(64) + (axis * 2 + sign) * np.int64(8) + np.minimum(band, 7)
+        _, first = np.unique(key, return_index=True)
+        return np.sort(first)
+
+    def place_level(self, k, P, Ns, Ng, stats: RunStats):
+        """Make the records of level k that the queries (P, Ns, Ng) need.
+
+        Returns ``(pending, own_record)``; ``own_record`` maps each query to its own
+        record when the level does not interpolate (accuracy 0), else it is None.
+        """
+        lv = self.cache.levels[k]
+        pending = _Pending()
+        nq = len(P)
+        stats.queries[k] += nq
+        if nq == 0:
+            return pending, None
+        if lv.accuracy == 0.0:
+            rng = self._rng(_TAG_HEMISPHERE, k, lv.count)
+            R0 = self._evaluate_hemispheres(k, P, Ns, Ng, pending, rng)
+            idx = lv.add(P, Ns, self._clamp_radius(R0, P))
+            pending.records.append(idx)
+            stats.new_records[k] += nq
+            self._tick()
+            return pending, idx
+        _, _, count = lv.lookup(P, Ns)
+        todo = np.flatnonzero(count == 0)
+        stats.cache_hits += nq - len(todo)
+        band = self._distance_band(P[todo]) if len(todo) else np.zeros(0, np.int64)
+        cell = 2.0 * lv.accuracy * self.max_spacing
+        passes = 0
+        while len(todo):
+            passes += 1
+            if passes >= MAX_PASSES:
+                local = np.arange(len(todo))
+            else:
+                local = self._spread_subset(P[todo], Ns[todo], band, cell)
+            pick = todo[local]
+            rng = self._rng(_TAG_HEMISPHERE, k, lv.count)
+            R0 = self._evaluate_hemispheres(k, P[pick], Ns[pick], Ng[pick], pending, rng)
+            R = self._clamp_radius(R0, P[pick])
+            pending.records.append(lv.add(P[pick], Ns[pick], R))
+            stats.new_records[k] += len(pick)
+            keep = np.ones(len(todo), bool)
+            keep[local] = False
+            todo, band = todo[keep], band[keep]
+            if len(todo):
+                # only this pass's records can cover what was uncovered before it
+                fresh = LevelRecords(lv.accuracy, lv.node_center[0], lv.node_half[0], capacity=len(pick))
+                fresh.add(P[pick], Ns[pick], R)
+                _, _, count = fresh.lookup(P[todo], Ns[todo])
+                todo, band = todo[count == 0], band[count == 0]
+            cell *= 0.5
+            self._tick()
+        return pending, None
+
+    # -- evaluation (bottom-up) --------------------------------------------------------
+    def _answer(self, k, P, Ns, own_record):
+        """Irradiance of level k at queries, from its complete record set."""
+        lv = self.cache.levels[k]
+        if own_record is not None:
+            return lv.E[own_record].astype(np.float64)
+        E, _, count = lv.lookup(P, Ns)
+        return E
+
+    def evaluate_level(self, k, pending: _Pending, next_answer):
+        """Give the records of ``pending`` their values (Eq. 2)."""
+        if not pending.records:
+            return
+        lv = self.cache.levels[k]
+        records = np.concatenate(pending.records)
+        known = pending.cat("known")
+        S = pending.cat("samples", width=0, dtype=np.int64)
+        if k < self.options.bounces:
+            hP, hNs, hNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
+            weight = pending.cat("hit_weight")
+            owner = pending.cat("hit_owner", width=0, dtype=np.int64)
+            if len(owner):
+                E_hit = self.direct.illuminance(hP, hNs, hNg, self._rng(_TAG_DIRECT_HITS, k, lv.count))
+                if next_answer is not None:
+                    E_hit += next_answer
+                contrib = weight * E_hit
+                for c in range(3):
+                    known[:, c] += np.bincount(owner, weights=contrib[:, c], minlength=len(records))
+                self._tick()
+        lv.E[records] = (np.pi / S)[:, None] * known
+
+    # -- the whole calculation -----------------------------------------------------------
+    def compute(self, points, normals) -> IlluminanceResult:
+        """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``."""
+        t0 = time.perf_counter()
+        self._rays_reported = self.tracer.rays_traced
+        points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
+        normals = np.asarray(normals, np.float64).reshape(-1, 3)
+        normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        B = self.options.bounces
+        stats = RunStats(new_records=[0] * (B + 1), queries=[0] * (B + 1))
+        if self.cache is None:
+            self.cache = self._new_cache(points)
+        auto_min, auto_max = self.default_spacing(points, normals) if len(points) else (1.0, 1.0)
+        scale = self.scene.unit_scale
+        self.max_spacing = self.options.max_spacing * scale if self.options.max_spacing else auto_max
+        self.min_spacing = self.options.min_spacing * scale if self.options.min_spacing else min(
+            auto_min, self.max_spacing)
+        self.min_spacing = min(self.min_spacing, self.max_spacing)
+        stats.min_spacing, stats.max_spacing = self.min_spacing, self.max_spacing
+        self._roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
+
+        # placement, level by level
+        levels = []          # (pending, own_record, query arrays) per level
+        qP, qNs, qNg = points, normals, normals
+        for k in range(B + 1):
+            if not self._level_active(k) or len(qP) == 0:
+                break
+            self._tick(f"placing level {k} ({len(qP)} queries)")
+            pending, own = self.place_level(k, qP, qNs, qNg, stats)
+            levels.append((pending, own, qP, qNs))
+            qP, qNs, qNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
+            if k + 1 > B or not self._level_active(k + 1):
+                break
+
+        # evaluation, deepest level first
+        next_answer = None
+        for k in range(len(levels) - 1, -1, -1):
+            self._tick(f"evaluating level {k}")
+            pending, _, _, _ = levels[k]
+            if k + 1 < len(levels):
+                _, own_next, P_next, N_next = levels[k + 1]
+                next_answer = self._answer(k + 1, P_next, N_next, own_next)
+            else:
+                next_answer = None
+            self.evaluate_level(k, pending, next_answer)
+
+        # answers at the query points
+        self._tick("direct light at the points")
+        direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
+                                         light_samples=QUERY_LIGHT_SAMPLES)
+        if levels:
+            _, own0, _, _ = levels[0]
+            indirect = self._answer(0, points, normals, own0)
+        else:
+            indirect = np.zeros_like(direct)
+        self._tick("done")
+        stats.records = self.cache.record_counts
+        stats.rays = self.tracer.rays_traced
+        stats.seconds = time.perf_counter() - t0
+        return IlluminanceResult(direct + indirect, direct, indirect, stats)
+
+
+def compute_illuminance(scene: Scene, points, normals, options: Options | None = None,
+                        cache: IrradianceCache | None = None, progress=None) -> IlluminanceResult:
+    """Illuminance [lux] at sensor ``points`` [m] facing ``normals``: direct + indirect.
+
+    Example
+    -------
+    >>> from lbl_illum import load_scene, compute_illuminance, read_points
+    >>> scene = load_scene("examples/office/scene.toml")          # doctest: +SKIP
+    >>> pts, nrm = read_points("examples/office/grid.pts", scene.unit_scale)  # doctest: +SKIP
+    >>> compute_illuminance(scene, pts, nrm).illuminance.mean()   # doctest: +SKIP
+    """
+    integ = Integrator(scene, options, cache, progress)
+    return integ.compute(points, normals)

@@ -1,0 +1,140 @@
+"""Quality options shared by the Python API, the scene file's ``[settings]`` and the CLI.
+
+=====================  =======  ============================================================
+option                 default  meaning
+=====================  =======  ============================================================
+``accuracy``           0.1      the paper's ``a`` (Eq. 5): a record serves queries whose
+                                error estimate is below ``a``.  0 disables interpolation
+                                (every query is a primary evaluation: pure Monte Carlo)
+``bounces``            5        diffuse reflections followed; 0 = light straight from its
+                                source (sun, light surfaces, sky and ground seen directly or
+                                through glass).  Radiance's ``-ab`` is ``bounces + 1``
+``samples``            1024     hemisphere samples M·N of a primary evaluation (Eq. 2) at the
+                                first level
+``ambient``            0        illuminance [lux] substituted at the bounce limit
+``min_spacing``        auto     lower clamp on each record's R_i [scene units]
+``max_spacing``        auto     upper clamp on each record's R_i [scene units]
+``bounce_scaling``     true     §3.4: each deeper level multiplies ``a`` by 1.4 and halves
+                                the samples
+``seed``               0        seed of every random number; same seed, same result
+=====================  =======  ============================================================
+
+``auto`` spacings are derived from the extent of what is computed (the sensor
+points), never from the scene's bounding box: see :func:`lbl_illum.integrator.default_spacing`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from .errors import InputError, check_keys
+
+__all__ = ["Options", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
+
+#: §3.4: factor on ``a`` per deeper diffuse level.
+BOUNCE_ACCURACY_FACTOR = 1.4
+#: §3.4: factor on the sample count per deeper diffuse level.
+BOUNCE_SAMPLE_FACTOR = 0.5
+#: Floor on the samples of a deeper-level primary evaluation (never above the first level's).
+MIN_DEEP_SAMPLES = 16
+
+
+@dataclass(frozen=True)
+class Options:
+    """Quality options of an illuminance calculation (see the module table)."""
+
+    accuracy: float = 0.1
+    bounces: int = 5
+    samples: int = 1024
+    ambient: float = 0.0
+    min_spacing: float | None = None
+    max_spacing: float | None = None
+    bounce_scaling: bool = True
+    seed: int = 0
+
+    def __post_init__(self):
+        self.validate("options")
+
+    # -- validation -------------------------------------------------------
+    def validate(self, where: str) -> None:
+        def bad(key, why):
+            raise InputError(f"{where}: '{key}' {why}")
+
+        for key in ("accuracy", "ambient", "min_spacing", "max_spacing"):
+            value = getattr(self, key)
+            if value is None and key.endswith("spacing"):
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                bad(key, f"must be a finite number, got {value!r}")
+            if value < 0:
+                bad(key, f"must be >= 0, got {value!r}")
+        for key in ("bounces", "samples", "seed"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int):
+                bad(key, f"must be a whole number, got {value!r}")
+        if self.samples < 1:
+            bad("samples", f"must be >= 1, got {self.samples}")
+        if self.bounces < 0:
+            bad("bounces", f"must be >= 0, got {self.bounces}")
+        if self.seed < 0:
+            bad("seed", f"must be >= 0, got {self.seed}")
+        for key in ("min_spacing", "max_spacing"):
+            value = getattr(self, key)
+            if value is not None and value <= 0:
+                bad(key, f"must be > 0, got {value!r}")
+        if (self.min_spacing is not None and self.max_spacing is not None
+                and self.min_spacing > self.max_spacing):
+            bad("min_spacing", f"({self.min_spacing:g}) must not exceed max_spacing ({self.max_spacing:g})")
+        if not isinstance(self.bounce_scaling, bool):
+            bad("bounce_scaling", f"must be true or false, got {self.bounce_scaling!r}")
+
+    # -- construction -----------------------------------------------------
+    @classmethod
+    def field_names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any] | None, where: str, base: "Options | None" = None) -> "Options":
+        """Options from a ``[settings]`` table, on top of ``base`` (default: the defaults)."""
+        base = base or cls()
+        if not table:
+            return base
+        check_keys(table, cls.field_names(), where)
+        values = dict(table)
+        for key in ("accuracy", "ambient", "min_spacing", "max_spacing"):
+            if isinstance(values.get(key), int) and not isinstance(values.get(key), bool):
+                values[key] = float(values[key])
+        try:
+            return dataclasses.replace(base, **values)
+        except InputError as exc:
+            raise InputError(str(exc).replace("options:", f"{where}:", 1)) from None
+
+    def replace(self, **changes) -> "Options":
+        """A copy with ``changes`` (``None`` values are ignored)."""
+        return dataclasses.replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+    # -- §3.4 per-level parameters -----------------------------------------
+    def level_accuracy(self, level: int) -> float:
+        """``a`` at diffuse level ``level`` (0 = the queries themselves)."""
+        return self.accuracy * (BOUNCE_ACCURACY_FACTOR ** level if self.bounce_scaling else 1.0)
+
+    def level_samples(self, level: int) -> int:
+        """Samples of a primary evaluation at diffuse ``level``.
+
+        With accuracy 0 (pure Monte Carlo) the deeper levels follow one path ray per
+        hit, so the cost stays samples · (bounces + 1) rays per query.
+        """
+        if level == 0:
+            return self.samples
+        if self.accuracy == 0.0:
+            return 1
+        if not self.bounce_scaling:
+            return self.samples
+        scaled = int(round(self.samples * BOUNCE_SAMPLE_FACTOR ** level))
+        return max(scaled, min(self.samples, MIN_DEEP_SAMPLES))
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)

@@ -1,0 +1,223 @@
+"""Ray casting with Embree (through embreex), on arrays of rays.
+
+Embree works in float32 and embreex fixes each ray's ``tnear`` at 0, so a ray
+leaving a surface must start a little off it.  This module owns that problem:
+
+* hit points are reconstructed in float64 as ``o + t d`` and then projected onto
+  the plane of the triangle hit (so their distance from the surface is float64
+  round-off, not float32); hit points on sphere primitives are projected onto the
+  true sphere, whose normal is the shading normal;
+* a ray leaving a surface point P starts at ``P + ε n`` with n the geometric normal
+  on the side the ray leaves towards and ``ε = SELF_HIT_EPSILON · (|P|∞ + ℓ)``,
+  ℓ the scene's median edge length: scale-aware, so the same room in mm or km
+  behaves the same.
+
+Shadow rays use Embree's ``OCCLUDED`` query against the opaque surfaces only, and
+glass along a shadow ray multiplies it by the glass's transmittance.
+
+embreex releases the GIL inside ``run``, so large batches are split into chunks
+traced by a thread pool and every core is used.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
+
+from .geometry import Triangles
+from .materials import GLASS
+
+__all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count"]
+
+#: Relative offset of ray origins off the surface they leave (see module docstring).
+SELF_HIT_EPSILON = 1e-5
+#: Glass layers a shadow ray may cross before it is considered blocked.
+MAX_GLASS_LAYERS = 16
+#: Rays per chunk handed to one embree call from one thread.
+CHUNK_RAYS = 32768
+
+
+def thread_count() -> int:
+    """Threads used for ray casting: ``$LBL_ILLUM_THREADS`` or every core."""
+    env = os.environ.get("LBL_ILLUM_THREADS")
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            pass
+    return max(1, os.cpu_count() or 1)
+
+
+@lru_cache(maxsize=4)
+def _pool(threads: int) -> ThreadPoolExecutor:
+    return ThreadPoolExecutor(max_workers=threads, thread_name_prefix="lbl-illum-trace")
+
+
+@dataclass
+class Hits:
+    """Result of a batch of closest-hit queries.
+
+    t : (n,) float64 — distance along the (unit) direction, ``inf`` for a miss
+    prim : (n,) int32 — index of the triangle hit, -1 for a miss
+    """
+
+    t: np.ndarray
+    prim: np.ndarray
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.prim >= 0
+
+
+def _embree_scene(vertices: np.ndarray):
+    if len(vertices) == 0:
+        return None
+    scene = rtcore_scene.EmbreeScene()
+    TriangleMesh(scene, np.ascontiguousarray(vertices, dtype=np.float32))
+    return scene
+
+
+class Tracer:
+    """Closest-hit and shadow queries against a scene's triangles.
+
+    Parameters
+    ----------
+    triangles : the scene's geometry [m]
+    material_kind : (m,) int8 material kind per material id (``materials.GLASS`` …)
+    transmittance : (m, 3) float64 glass transmittance per material id
+    threads : worker threads (default :func:`thread_count`)
+    """
+
+    def __init__(self, triangles: Triangles, material_kind: np.ndarray, transmittance: np.ndarray,
+                 threads: int | None = None):
+        self.triangles = triangles
+        self.threads = threads or thread_count()
+        self.rays_traced = 0
+        verts = triangles.vertices
+        kind = np.asarray(material_kind)[triangles.material]
+        self._glass_ids = np.flatnonzero(kind == GLASS).astype(np.int32)
+        self._opaque_ids = np.flatnonzero(kind != GLASS).astype(np.int32)
+        self._all = _embree_scene(verts)
+        self._opaque = _embree_scene(verts[self._opaque_ids])
+        self._glass = _embree_scene(verts[self._glass_ids])
+        self._glass_tau = np.asarray(transmittance, dtype=np.float64)[triangles.material[self._glass_ids]]
+        self.normals = triangles.normals
+        edges = np.linalg.norm(verts[:, 1] - verts[:, 0], axis=1)
+        self.length_scale = float(np.median(edges)) if len(edges) else 1.0
+
+    # -- low level ----------------------------------------------------------
+    def _run(self, scene, origins, directions, tmax, occluded):
+        """Trace through ``scene`` in chunks on the thread pool."""
+        n = len(origins)
+        self.rays_traced += n
+        o = np.ascontiguousarray(origins, dtype=np.float32)
+        d = np.ascontiguousarray(directions, dtype=np.float32)
+        dist = None if tmax is None else np.ascontiguousarray(np.minimum(tmax, 3e38), dtype=np.float32)
+        if occluded:
+            out = np.empty(n, dtype=bool)
+        else:
+            t_out = np.empty(n, dtype=np.float64)
+            p_out = np.empty(n, dtype=np.int32)
+
+        def work(s):
+            ds = None if dist is None else dist[s]
+            if occluded:
+                out[s] = scene.run(o[s], d[s], dists=ds, query="OCCLUDED") != -1
+            else:
+                res = scene.run(o[s], d[s], dists=ds, output=1)
+                prim = res["primID"]
+                t_out[s] = np.where(prim >= 0, res["tfar"], np.inf)
+                p_out[s] = prim
+
+        chunk = max(4096, min(CHUNK_RAYS, -(-n // self.threads)))
+        slices = [slice(i, min(n, i + chunk)) for i in range(0, n, chunk)]
+        if len(slices) <= 1:
+            for s in slices:
+                work(s)
+        else:
+            list(_pool(self.threads).map(work, slices))
+        return out if occluded else (t_out, p_out)
+
+    # -- queries --------------------------------------------------------------
+    def intersect(self, origins: np.ndarray, directions: np.ndarray) -> Hits:
+        """Closest hit of (n, 3) rays with unit ``directions`` against every surface."""
+        if len(origins) == 0 or self._all is None:
+            return Hits(np.full(len(origins), np.inf), np.full(len(origins), -1, np.int32))
+        t, prim = self._run(self._all, origins, directions, None, occluded=False)
+        return Hits(t, prim)
+
+    def transmittance(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray | None = None) -> np.ndarray:
+        """(n, 3) fraction of light passing along each segment: 0 if an opaque surface
+        blocks it, else the product of the transmittances of the glass it crosses."""
+        n = len(origins)
+        result = np.ones((n, 3))
+        if n == 0:
+            return result
+        if tmax is None:
+            tmax = np.full(n, np.inf)
+        if self._opaque is not None:
+            blocked = self._run(self._opaque, origins, directions, tmax, occluded=True)
+            result[blocked] = 0.0
+        if self._glass is None:
+            return result
+        live = np.flatnonzero(result[:, 0] > 0)
+        o = np.asarray(origins, dtype=np.float64)[live]
+        d = np.asarray(directions, dtype=np.float64)[live]
+        tm = np.asarray(tmax, dtype=np.float64)[live]
+        for _ in range(MAX_GLASS_LAYERS):
+            if len(live) == 0:
+                break
+            t, prim = self._run(self._glass, o, d, tm, occluded=False)
+            crossed = prim >= 0
+            live, o, d, tm, t, prim = live[crossed], o[crossed], d[crossed], tm[crossed], t[crossed], prim[crossed]
+            result[live] *= self._glass_tau[prim]
+            step = t + SELF_HIT_EPSILON * (np.abs(o).max(axis=1) + t + self.length_scale)
+            o = o + step[:, None] * d
+            tm = tm - step
+        else:
+            result[live] = 0.0     # more layers than a window has: treat as blocked
+        return result
+
+    # -- hit geometry -----------------------------------------------------------
+    def surface(self, origins: np.ndarray, directions: np.ndarray, hits: Hits, index: np.ndarray | None = None):
+        """Positions and normals at the hits of the rays selected by ``index``.
+
+        Returns ``(points, geometric_normals, shading_normals)``, each (k, 3) float64,
+        with both normals turned to face the incoming ray (surfaces are two-sided).
+        """
+        if index is None:
+            index = np.flatnonzero(hits.hit)
+        o = np.asarray(origins, dtype=np.float64)[index]
+        d = np.asarray(directions, dtype=np.float64)[index]
+        prim = hits.prim[index]
+        p = o + hits.t[index][:, None] * d
+        ng = self.normals[prim]
+        v0 = self.triangles.vertices[prim, 0]
+        p -= np.einsum("ij,ij->i", p - v0, ng)[:, None] * ng          # onto the triangle's plane
+        flip = np.einsum("ij,ij->i", ng, d) > 0.0
+        ng = np.where(flip[:, None], -ng, ng)
+        ns = ng.copy()
+        sphere = self.triangles.sphere[prim]
+        on_sphere = np.flatnonzero(sphere >= 0)
+        if len(on_sphere):
+            c = self.triangles.sphere_center[sphere[on_sphere]]
+            r = self.triangles.sphere_radius[sphere[on_sphere]]
+            radial = p[on_sphere] - c
+            radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+            p[on_sphere] = c + r[:, None] * radial                     # onto the true sphere
+            outward = np.einsum("ij,ij->i", radial, d[on_sphere]) < 0.0
+            ns[on_sphere] = np.where(outward[:, None], radial, -radial)
+            ng[on_sphere] = ns[on_sphere]
+        return p, ng, ns
+
+    def offset(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        """Ray origins just off the surface at ``points`` on the side of ``normals``."""
+        points = np.asarray(points, dtype=np.float64)
+        eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        return points + eps[:, None] * normals
