@@ -61,6 +61,8 @@ class LevelRecords:
         self.node_half = np.zeros(capacity, np.float64)
         self.node_child = np.full((capacity, 8), -1, np.int32)
         self.node_first = np.full(capacity, -1, np.int32)
+        self.node_lo = np.full((capacity, 3), np.inf)
+        self.node_hi = np.full((capacity, 3), -np.inf)
         self.node_center[0] = center
         self.node_half[0] = half
         self.n_nodes = 1
@@ -79,7 +81,8 @@ class LevelRecords:
     def _grow_nodes(self):
         cap = len(self.node_half)
         new = 2 * cap
-        for name, fill in (("node_center", 0), ("node_half", 0), ("node_child", -1), ("node_first", -1)):
+        for name, fill in (("node_center", 0), ("node_half", 0), ("node_child", -1), ("node_first", -1),
+                           ("node_lo", np.inf), ("node_hi", -np.inf)):
             old = getattr(self, name)
             arr = np.full((new,) + old.shape[1:], fill, old.dtype)
             arr[:cap] = old
@@ -99,7 +102,8 @@ class LevelRecords:
         while start < stop:
             self.n_nodes, start = octree.insert_records(
                 start, stop, self.P, self.R, self.accuracy if self.accuracy > 0 else 1.0, self._next,
-                self.node_center, self.node_half, self.node_child, self.node_first, self.n_nodes)
+                self.node_center, self.node_half, self.node_child, self.node_first, self.node_lo, self.node_hi,
+                self.n_nodes)
             if start < stop:
                 self._grow_nodes()
 
@@ -139,7 +143,7 @@ class LevelRecords:
         if n and self.count and self.accuracy > 0:
             octree.lookup(P, N, self.P, self.N, self.E, self.R, self.accuracy, self._next,
                           self.node_center, self.node_half, self.node_child, self.node_first,
-                          out_E, out_w, out_n)
+                          self.node_lo, self.node_hi, out_E, out_w, out_n)
         return out_E, out_w, out_n
 
     def arrays(self) -> dict:

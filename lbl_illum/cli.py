@@ -27,13 +27,14 @@ quality options (also settable under [settings] in the scene file; the command l
 
 
 class _ProgressBar:
-    """Adapter from the integrator's progress calls to a tqdm bar on standard error."""
+    """Adapter from the integrator's progress calls to a tqdm bar on standard error
+    (shown after one second, and only on a terminal)."""
 
     def __init__(self, enabled: bool):
         from tqdm import tqdm
 
         self.bar = tqdm(total=None, unit="ray", unit_scale=True, delay=1.0, file=sys.stderr,
-                        disable=not enabled, leave=False, dynamic_ncols=True)
+                        disable=None if enabled else True, leave=False, dynamic_ncols=True)
 
     def update(self, rays: int) -> None:
         if rays:

@@ -65,9 +65,11 @@ __all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator",
 MAX_SPECULAR_DEPTH = 8
 #: Light-surface shadow rays per query point (hemisphere hits use one).
 QUERY_LIGHT_SAMPLES = 16
-#: Record spacing defaults: max = D / 2, min = max / 64, D the extent of the queries.
+#: Record spacing defaults: max = D / 2, min = max / 16, D the extent of the queries.
+#: (On the office example min = max/64 made 2.4× the records of max/16 at the same
+#: error against a converged reference: 12,043 against 5,026 level-2 records.)
 MAX_SPACING_FRACTION = 0.5
-SPACING_RATIO = 64.0
+SPACING_RATIO = 16.0
 #: Passes of placement before all remaining uncovered queries are taken at once.
 MAX_PASSES = 64
 
@@ -203,8 +205,8 @@ class Integrator:
         """(min, max) record spacing [m] from the extent of the queries.
 
         D = max(diagonal of the queries' box, 2 × median distance from the queries to
-        the surfaces they see); max = D/2, min = max/64 (the ratio of Radiance's
-        limits).  The scene's bounding box plays no part.
+        the surfaces they see); max = D/2, min = max/16.  The scene's bounding box
+        plays no part.
         """
         diag = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
         rng = self._rng(_TAG_PROBE)
@@ -380,8 +382,11 @@ class Integrator:
             stats.new_records[k] += nq
             self._tick()
             return pending, idx
-        _, _, count = lv.lookup(P, Ns)
-        todo = np.flatnonzero(count == 0)
+        if lv.count:
+            _, _, count = lv.lookup(P, Ns)
+            todo = np.flatnonzero(count == 0)
+        else:
+            todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
         band = self._distance_band(P[todo]) if len(todo) else np.zeros(0, np.int64)
         cell = 2.0 * lv.accuracy * self.max_spacing

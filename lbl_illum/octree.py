@@ -13,11 +13,15 @@ and it is not "in front" of the query (Eq. 6):
 The tolerance only absorbs floating-point round-off for records on the same plane.
 
 Octree: each record lives in the node that contains P_i and whose side s satisfies
-2 a R_i < s ≤ 4 a R_i (records larger than the root stay in the root).  The search
-tests a node's records and descends into each child whose cube, grown by half the
-child's side on every face, contains P.  Since a R_i < s/2, every record whose
-valid domain contains P is found.  Nodes are arrays: centre, half side, eight child
-indices (-1: none) and the head of a singly linked list of records.
+2 a R_i < s ≤ 4 a R_i (records larger than the root stay in the root).  The paper's
+search tests a node's records and descends into each child whose cube, grown by half
+the child's side on every face, contains P.  Since a R_i < s/2, every record whose
+valid domain contains P is found.  Each node here also keeps the box around the valid
+domains (P_i ± a R_i) of every record in its subtree, and the search descends only
+into children whose box contains P as well: still exact, since a record serves only
+queries inside its domain, but a query far from all records stops at the root.  Nodes
+are arrays: centre, half side, domain box, eight child indices (-1: none) and the head
+of a singly linked list of records.
 """
 
 from __future__ import annotations
@@ -53,7 +57,7 @@ def weight_terms(px, py, pz, nx, ny, nz, P, N, R, i):
 
 @njit(cache=True)
 def insert_records(start, stop, P, R, accuracy, rec_next, node_center, node_half, node_child,
-                   node_first, n_nodes):
+                   node_first, node_lo, node_hi, n_nodes):
     """Insert records ``start:stop`` into the octree; return (n_nodes, next record).
 
     Stops early (next record < stop) when the node arrays are full; the caller grows
@@ -64,7 +68,14 @@ def insert_records(start, stop, P, R, accuracy, rec_next, node_center, node_half
         domain = accuracy * R[i]
         node = 0
         depth = 0
-        while 2.0 * node_half[node] > 4.0 * domain and depth < MAX_DEPTH:
+        while True:
+            for c in range(3):
+                if P[i, c] - domain < node_lo[node, c]:
+                    node_lo[node, c] = P[i, c] - domain
+                if P[i, c] + domain > node_hi[node, c]:
+                    node_hi[node, c] = P[i, c] + domain
+            if not (2.0 * node_half[node] > 4.0 * domain and depth < MAX_DEPTH):
+                break
             octant = 0
             if P[i, 0] >= node_center[node, 0]:
                 octant |= 1
@@ -85,6 +96,9 @@ def insert_records(start, stop, P, R, accuracy, rec_next, node_center, node_half
                 node_center[child, 2] = node_center[node, 2] + (h if octant & 4 else -h)
                 for c in range(8):
                     node_child[child, c] = -1
+                for c in range(3):
+                    node_lo[child, c] = np.inf
+                    node_hi[child, c] = -np.inf
                 node_first[child] = -1
                 node_child[node, octant] = child
             node = child
@@ -96,7 +110,7 @@ def insert_records(start, stop, P, R, accuracy, rec_next, node_center, node_half
 
 @njit(cache=True, parallel=True)
 def lookup(qP, qN, P, N, E, R, accuracy, rec_next, node_center, node_half, node_child, node_first,
-           out_E, out_w, out_n):
+           node_lo, node_hi, out_E, out_w, out_n):
     """Interpolate (Eq. 5) the records valid at each query.
 
     For query q: ``out_E[q] = Σ w_i E_i / Σ w_i`` over the set S, ``out_w[q] = Σ w_i``
@@ -115,8 +129,10 @@ def lookup(qP, qN, P, N, E, R, accuracy, rec_next, node_center, node_half, node_
             s2 = 0.0
             count = 0
             top = 0
-            stack[0] = 0
-            top = 1
+            if (node_lo[0, 0] <= px <= node_hi[0, 0] and node_lo[0, 1] <= py <= node_hi[0, 1]
+                    and node_lo[0, 2] <= pz <= node_hi[0, 2]):
+                stack[0] = 0
+                top = 1
             while top > 0:
                 top -= 1
                 node = stack[top]
@@ -136,7 +152,10 @@ def lookup(qP, qN, P, N, E, R, accuracy, rec_next, node_center, node_half, node_
                     if child >= 0:
                         reach = 2.0 * node_half[child]
                         if (abs(px - node_center[child, 0]) <= reach and abs(py - node_center[child, 1]) <= reach
-                                and abs(pz - node_center[child, 2]) <= reach):
+                                and abs(pz - node_center[child, 2]) <= reach
+                                and node_lo[child, 0] <= px <= node_hi[child, 0]
+                                and node_lo[child, 1] <= py <= node_hi[child, 1]
+                                and node_lo[child, 2] <= pz <= node_hi[child, 2]):
                             stack[top] = child
                             top += 1
             out_w[q] = sw
