@@ -99,3 +99,20 @@ def test_more_bounces_add_light_and_converge_in_a_closed_box():
     E = [compute_illuminance(scene, pts, nrm, Options(bounces=b, samples=256)).indirect[0, 0] for b in (1, 2, 6)]
     assert 0 < E[0] < E[1] < E[2]
     assert E[2] - E[1] < E[1] - E[0]
+
+
+def test_same_room_in_millimetres_and_kilometres_gives_the_same_illuminance():
+    """Units are converted on reading; the engine's offsets scale with the geometry."""
+    def room(factor, units):
+        geo = [{"shape": "box", "center": [0, 0, 1.5 * factor], "size": [4 * factor, 6 * factor, 3 * factor],
+                "material": "wall"},
+               {"shape": "rectangle", "origin": [-2 * factor, -1 * factor, 2.999 * factor],
+                "u": [4 * factor, 0, 0], "v": [0, 2 * factor, 0], "material": "sky-light"}]
+        mats = {"wall": {"type": "diffuse", "reflectance": 0.5}, "sky-light": {"type": "light", "luminance": 500}}
+        return make_scene(geo, mats, units=units)
+    pts = np.array([[0.0, 0.0, 0.8], [1.5, 2.5, 0.8]])
+    nrm = np.array([[0, 0, 1.0], [0, 0, 1.0]])
+    opts = Options(bounces=2, samples=128)
+    E_mm = compute_illuminance(room(1000.0, "mm"), pts, nrm, opts).illuminance
+    E_km = compute_illuminance(room(0.001, "km"), pts, nrm, opts).illuminance
+    assert np.allclose(E_mm, E_km, rtol=1e-6)
