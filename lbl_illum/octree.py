@@ -15,13 +15,13 @@ The tolerance only absorbs floating-point round-off for records on the same plan
 Octree: each record lives in the node that contains P_i and whose side s satisfies
 2 a R_i < s ≤ 4 a R_i (records larger than the root stay in the root).  The paper's
 search tests a node's records and descends into each child whose cube, grown by half
-the child's side on every face, contains P.  Since a R_i < s/2, every record whose
-valid domain contains P is found.  Each node here also keeps the box around the valid
-domains (P_i ± a R_i) of every record in its subtree, and the search descends only
-into children whose box contains P as well: still exact, since a record serves only
-queries inside its domain, but a query far from all records stops at the root.  Nodes
-are arrays: centre, half side, domain box, eight child indices (-1: none) and the head
-of a singly linked list of records.
+the child's side on every face, contains P.  Here each node also keeps the box around
+the valid domains (P_i ± a R_i) of every record in its subtree, and the search
+descends into a child only when that box contains P.  This is exact — a record
+serves only queries inside its domain, which lies inside every box on its path —
+and tighter than the grown cube (which it implies), so a query far from all records
+stops at the root.  Nodes are arrays: centre, half side, domain box, eight child
+indices (-1: none) and the head of a singly linked list of records.
 """
 
 from __future__ import annotations
@@ -150,10 +150,7 @@ def lookup(qP, qN, P, N, E, R, accuracy, rec_next, node_center, node_half, node_
                 for c in range(8):
                     child = node_child[node, c]
                     if child >= 0:
-                        reach = 2.0 * node_half[child]
-                        if (abs(px - node_center[child, 0]) <= reach and abs(py - node_center[child, 1]) <= reach
-                                and abs(pz - node_center[child, 2]) <= reach
-                                and node_lo[child, 0] <= px <= node_hi[child, 0]
+                        if (node_lo[child, 0] <= px <= node_hi[child, 0]
                                 and node_lo[child, 1] <= py <= node_hi[child, 1]
                                 and node_lo[child, 2] <= pz <= node_hi[child, 2]):
                             stack[top] = child
