@@ -24,13 +24,13 @@ import hashlib
 import io
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from . import octree
 from .errors import InputError
+from .files import atomic_write_bytes
 
 __all__ = ["LevelRecords", "IrradianceCache", "CACHE_FORMAT_VERSION"]
 
@@ -202,15 +202,7 @@ class IrradianceCache:
         }
         buf = io.BytesIO()
         np.savez(buf, header=np.array(json.dumps(header)), **arrays)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(buf.getvalue())
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        atomic_write_bytes(path, buf.getvalue())
 
     @classmethod
     def load(cls, path: str | os.PathLike, fingerprint: str | None = None) -> "IrradianceCache":

@@ -104,7 +104,8 @@ def _run_illuminance(args) -> int:
     from .cache import IrradianceCache
     from .integrator import Integrator
     from .scene import load_scene
-    from .sensors import atomic_write_text, check_output_path, read_points, write_results
+    from .files import atomic_write_text
+    from .sensors import check_output_path, read_points, write_results
 
     check_output_path(args.output)
     if args.stats and Path(args.stats).parent and not Path(args.stats).parent.exists():

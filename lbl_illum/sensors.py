@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from .errors import InputError
+from .files import atomic_write_text
 
-__all__ = ["read_points", "write_results", "atomic_write_text", "RESULT_FORMATS"]
+__all__ = ["read_points", "write_results", "check_output_path", "RESULT_FORMATS"]
 
 RESULT_FORMATS = (".csv", ".txt")
 
@@ -63,21 +63,6 @@ def read_points(path: str | os.PathLike, unit_scale: float = 1.0) -> tuple[np.nd
     data = np.array(rows, dtype=np.float64)
     normals = data[:, 3:] / np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
     return data[:, :3] * unit_scale, normals
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename."""
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def check_output_path(path: str | os.PathLike, formats=RESULT_FORMATS) -> Path:

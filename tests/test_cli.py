@@ -129,3 +129,17 @@ def test_module_entry_point_and_help():
         proc = subprocess.run([sys.executable] + argv, capture_output=True, text=True, timeout=60)
         assert proc.returncode == 0 and "usage: lbl-illum" in proc.stdout
     assert "--accuracy" in proc.stdout and "--cache" in proc.stdout
+
+
+def test_outputs_get_ordinary_permissions(sphere_job, capsys):
+    import os
+    import stat
+
+    tmp, pts = sphere_job
+    assert run(["illuminance", SPHERE / "scene.toml", "--points", pts, "-o", tmp / "r.csv", "-q",
+                "--cache", tmp / "c.lblcache"] + FAST, capsys)[0] == 0
+    mask = os.umask(0)
+    os.umask(mask)
+    for name in ("r.csv", "c.lblcache"):
+        assert stat.S_IMODE((tmp / name).stat().st_mode) == 0o666 & ~mask
+    assert not [p for p in tmp.iterdir() if p.name.endswith(".tmp")]
