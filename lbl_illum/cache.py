@@ -8,14 +8,14 @@ reflections; a value computed after k bounces never stands in for one after fewe
 
 Records and octree nodes are growable structure-of-arrays buffers; the compiled
 kernels of :mod:`lbl_illum.octree` insert and look them up.  A cache is plain data:
-it can be saved, loaded and merged, and the same records always give the same
-answers, whatever order they were made in.
+it can be saved and loaded, and the same records always give the same answers,
+whatever order they were made in.
 
 File format (``.npz``, version 1): arrays ``L{k}_P``, ``L{k}_N``, ``L{k}_E``,
 ``L{k}_R`` per level and a ``header`` holding JSON: ``format``, ``version``,
 ``fingerprint`` (of the scene and the settings that the records depend on),
-``accuracy`` per level, ``records`` per level, and ``checksum``, the SHA-256 of
-the record arrays.
+``accuracy`` per level, ``records`` per level, ``center`` and ``half`` of the octree's
+root cube [m], and ``checksum``, the SHA-256 of the record arrays.
 """
 
 from __future__ import annotations
@@ -225,7 +225,8 @@ class IrradianceCache:
             raise InputError(f"{name}: cache file is damaged (checksum mismatch)")
         if fingerprint is not None and header.get("fingerprint") != fingerprint:
             raise InputError(f"{name}: cache was made for another scene or other settings "
-                             "(geometry, materials, sky, sun, accuracy, bounces, samples or ambient differ)")
+                             "(geometry, materials, sky, sun, accuracy, bounces, samples, ambient or "
+                             "bounce scaling differ)")
         cache = cls(header["fingerprint"], header["accuracy"], header["center"], header["half"])
         for k, lv in enumerate(cache.levels):
             P = arrays[f"L{k}_P"]

@@ -108,8 +108,9 @@ def _run_illuminance(args) -> int:
     from .sensors import check_output_path, read_points, write_results
 
     check_output_path(args.output)
-    if args.stats and Path(args.stats).parent and not Path(args.stats).parent.exists():
-        raise InputError(f"{args.stats}: folder does not exist")
+    for extra in (args.stats, args.cache):
+        if extra and not Path(extra).resolve().parent.is_dir():
+            raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
     scene = load_scene(args.scene)
     options = scene.options.replace(
         accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,

@@ -351,16 +351,24 @@ class Integrator:
         The cell side is ``cell`` inside the query box and doubles with each
         power-of-two ``band`` of distance outside it, as the records' spacing limit
         grows.  Cells are hashed to one 64-bit key (a collision only merges two cells
-        for one pass; the next pass picks the other).
+        for one pass; the next pass picks the other).  In each cell the query nearest
+        the centre is taken, and picks come in key order, so the records made depend
+        on the queries' positions, not on their order.
         """
         axis = np.argmax(np.abs(N), axis=1)
         sign = np.take_along_axis(N, axis[:, None], axis=1)[:, 0] > 0
         size = cell * np.exp2(band.astype(np.float64))
-        ijk = np.floor(P / size[:, None]).astype(np.int64)
+        scaled = P / size[:, None]
+        ijk = np.floor(scaled).astype(np.int64)
         key = (ijk[:, 0] * np.int64(73856093)) ^ (ijk[:, 1] * np.int64(19349663)) ^ (ijk[:, 2] * np.int64(83492791))
         key = key * np.int64(64) + (axis * 2 + sign) * np.int64(8) + np.minimum(band, 7)
-        _, first = np.unique(key, return_index=True)
-        return np.sort(first)
+        # the query nearest its cell's centre, picks in key order: the choice depends on
+        # where the queries are, not on the order they came in
+        off_centre = np.sum((scaled - ijk - 0.5) ** 2, axis=1)
+        order = np.lexsort((off_centre, key))
+        first = np.ones(len(order), bool)
+        first[1:] = key[order[1:]] != key[order[:-1]]
+        return order[first]
 
     def place_level(self, k, P, Ns, Ng, stats: RunStats):
         """Make the records of level k that the queries (P, Ns, Ng) need.

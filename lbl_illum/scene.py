@@ -123,7 +123,8 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
 
     ``base_dir`` is where geometry files are looked up; ``where`` names the source in
     messages (normally the scene file's name).  Lengths are in ``data["units"]`` and
-    come out in metres; the ``[settings]`` spacings are converted too.
+    come out in metres; the ``[settings]`` spacings stay in scene units (the
+    integrator converts them with ``unit_scale``).
     """
     if not isinstance(data, Mapping):
         raise InputError(f"{where}: a scene must be a table of keys, got {type(data).__name__}")

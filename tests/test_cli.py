@@ -143,3 +143,11 @@ def test_outputs_get_ordinary_permissions(sphere_job, capsys):
     for name in ("r.csv", "c.lblcache"):
         assert stat.S_IMODE((tmp / name).stat().st_mode) == 0o666 & ~mask
     assert not [p for p in tmp.iterdir() if p.name.endswith(".tmp")]
+
+
+def test_cache_in_missing_folder_is_refused_before_any_output(sphere_job, capsys):
+    tmp, pts = sphere_job
+    code, _, err = run(["illuminance", SPHERE / "scene.toml", "--points", pts, "-o", tmp / "r.csv",
+                        "--cache", tmp / "nowhere" / "c.lblcache"] + FAST, capsys)
+    assert code == 2 and "does not exist" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp / "r.csv").exists()

@@ -116,3 +116,15 @@ def test_same_room_in_millimetres_and_kilometres_gives_the_same_illuminance():
     E_mm = compute_illuminance(room(1000.0, "mm"), pts, nrm, opts).illuminance
     E_km = compute_illuminance(room(0.001, "km"), pts, nrm, opts).illuminance
     assert np.allclose(E_mm, E_km, rtol=1e-6)
+
+
+def test_records_and_results_do_not_depend_on_the_order_of_the_points():
+    """A shuffled sensor file makes the same records and the same value at every point."""
+    scene = load_scene(EXAMPLES / "office" / "scene.toml")
+    points, normals = read_points(EXAMPLES / "office" / "grid.pts", scene.unit_scale)
+    opts = Options(accuracy=0.2, bounces=2, samples=64)
+    a = compute_illuminance(scene, points, normals, opts)
+    perm = np.random.default_rng(5).permutation(len(points))
+    b = compute_illuminance(scene, points[perm], normals[perm], opts)
+    assert a.stats.records == b.stats.records
+    assert np.allclose(b.illuminance, a.illuminance[perm], rtol=1e-9)
