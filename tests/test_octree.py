@@ -52,8 +52,10 @@ def test_octree_lookup_equals_brute_force(seed, n_rec, a, spread):
     count, sw, Ei = brute_force(qP, qN, P, N, E, R, a)
     E_oct, w_oct, n_oct = lv.lookup(qP, qN)
     assert np.array_equal(n_oct, count)
-    assert np.allclose(w_oct, sw, rtol=1e-7)
-    assert np.allclose(E_oct, Ei, rtol=1e-6, atol=1e-6)
+    # the set S is exact; a query within ~1e-5 of a record has a weight set by round-off
+    # in sqrt(1 - N·N_i) (float32 normals, different summation order), hence 1e-4
+    assert np.allclose(w_oct, sw, rtol=1e-4)
+    assert np.allclose(E_oct, Ei, rtol=1e-4, atol=1e-6)
 
 
 def test_record_sits_in_a_node_of_the_paper_size():
