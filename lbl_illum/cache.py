@@ -150,12 +150,6 @@ class LevelRecords:
         n = self.count
         return {"P": self.P[:n].copy(), "N": self.N[:n].copy(), "E": self.E[:n].copy(), "R": self.R[:n].copy()}
 
-    @property
-    def nbytes_per_record(self) -> float:
-        """Memory of the record arrays and their list links per record [bytes]."""
-        return float(self.P.itemsize * 3 + self.N.itemsize * 3 + self.E.itemsize * 3 + self.R.itemsize
-                     + self._next.itemsize)
-
 
 class IrradianceCache:
     """Records of every diffuse level of one scene and one set of settings.

@@ -103,6 +103,7 @@ def _run_illuminance(args) -> int:
     t0 = time.perf_counter()
     from .cache import IrradianceCache
     from .integrator import Integrator
+    from .photometry import luminance
     from .scene import load_scene
     from .files import atomic_write_text
     from .sensors import check_output_path, read_points, write_results
@@ -131,7 +132,7 @@ def _run_illuminance(args) -> int:
     stats = result.stats
     E = result.illuminance
     write_results(args.output, points / scene.unit_scale, normals, E,
-                  result.direct @ _weights(), result.indirect @ _weights())
+                  luminance(result.direct), luminance(result.indirect))
     if args.cache:
         integ.cache.save(args.cache)
     seconds = time.perf_counter() - t0
@@ -158,12 +159,6 @@ def _run_illuminance(args) -> int:
               f"max {E.max():.4g}) in {seconds:.2f} s; records per level {stats.records} "
               f"({stats.primary_evaluations} new); {stats.rays:,} rays -> {args.output}", file=sys.stderr)
     return 0
-
-
-def _weights():
-    from .photometry import luminance_weights
-
-    return luminance_weights()
 
 
 def main(argv=None) -> int:

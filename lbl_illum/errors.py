@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Iterable, Mapping
 
 __all__ = ["InputError", "check_keys", "get_number", "get_rgb", "get_vector"]
 
@@ -100,7 +100,3 @@ def get_vector(table: Mapping[str, Any], key: str, where: str, length: int = 3) 
 def plural(n: int, word: str) -> str:
     """'1 point', '3 points'."""
     return f"{n} {word}" if n == 1 else f"{n} {word}s"
-
-
-def as_sequence(value: Any) -> Sequence:
-    return value if isinstance(value, (list, tuple)) else [value]

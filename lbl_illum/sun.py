@@ -13,6 +13,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .errors import check_keys, get_number
+from .hemisphere import orthonormal_basis
 
 __all__ = ["Sun", "SUN_SOLID_ANGLE", "sun_from_table"]
 
@@ -54,8 +55,6 @@ class Sun:
         cos_t = 1.0 - np.asarray(u) * (1.0 - SUN_COS_HALF_ANGLE)
         sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
         phi = 2.0 * np.pi * np.asarray(v)
-        from .hemisphere import orthonormal_basis
-
         t, b = orthonormal_basis(self.direction[None, :])
         return (sin_t * np.cos(phi))[:, None] * t + (sin_t * np.sin(phi))[:, None] * b + cos_t[:, None] * self.direction
 
