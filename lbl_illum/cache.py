@@ -53,6 +53,8 @@ class LevelRecords:
         self.E = np.zeros((capacity, 3), np.float32)
         self.R = np.zeros(capacity, np.float32)
         self._next = np.full(capacity, -1, np.int32)
+        self._tree_version = 0
+        self._frozen = None
         self._reset_tree(np.asarray(center, np.float64), float(half), 256)
 
     # -- storage ---------------------------------------------------------------
@@ -66,6 +68,7 @@ class LevelRecords:
         self.node_center[0] = center
         self.node_half[0] = half
         self.n_nodes = 1
+        self._tree_version += 1
 
     def _grow_records(self, needed):
         cap = len(self.R)
@@ -99,6 +102,7 @@ class LevelRecords:
         self._insert(0, self.count)
 
     def _insert(self, start, stop):
+        self._tree_version += 1
         while start < stop:
             self.n_nodes, start = octree.insert_records(
                 start, stop, self.P, self.R, self.accuracy if self.accuracy > 0 else 1.0, self._next,
@@ -141,10 +145,24 @@ class LevelRecords:
         out_w = np.zeros(n)
         out_n = np.zeros(n, np.int32)
         if n and self.count and self.accuracy > 0:
-            octree.lookup(P, N, self.P, self.N, self.E, self.R, self.accuracy, self._next,
-                          self.node_center, self.node_half, self.node_child, self.node_first,
-                          self.node_lo, self.node_hi, out_E, out_w, out_n)
+            perm, start, count, box, packed = self._frozen_tree()
+            octree.lookup(P, N, packed, self.E[perm], start, count, self.node_child, box, self.accuracy,
+                          out_E, out_w, out_n)
         return out_E, out_w, out_n
+
+    def _frozen_tree(self):
+        """The lookup layout of :func:`octree.freeze`, rebuilt after any insertion."""
+        if self._frozen is None or self._frozen[0] != self._tree_version:
+            n, m = self.count, self.n_nodes
+            perm = np.empty(n, np.int64)
+            start = np.empty(m, np.int32)
+            count = np.empty(m, np.int32)
+            box = np.empty((m, 6), np.float64)
+            packed = np.empty((n, 8), np.float64)
+            octree.freeze(m, self.node_first, self._next, self.P, self.N, self.R, self.accuracy,
+                          self.node_lo, self.node_hi, start, count, box, perm, packed)
+            self._frozen = (self._tree_version, perm, start, count, box, packed)
+        return self._frozen[1:]
 
     def arrays(self) -> dict:
         n = self.count

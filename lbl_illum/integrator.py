@@ -55,6 +55,7 @@ from .direct import DirectLight
 from .hemisphere import cell_counts, cosine_directions, stratified_directions
 from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
 from .options import Options
+from .placement import distance_bands, pick_per_cell
 from .photometry import luminance
 from .raycast import Tracer
 from .scene import Scene
@@ -338,38 +339,6 @@ class Integrator:
         far = np.linalg.norm(outside, axis=1)
         return np.clip(R0, self.min_spacing, self.max_spacing + far)
 
-    def _distance_band(self, P):
-        """Power-of-two band of the distance outside the query box (0 inside it)."""
-        lo_box, hi_box = self._roi
-        far = np.linalg.norm(np.maximum(0.0, np.maximum(lo_box - P, P - hi_box)), axis=1)
-        return np.ceil(np.log2(1.0 + far / self.max_spacing)).astype(np.int64)
-
-    @staticmethod
-    def _spread_subset(P, N, band, cell):
-        """Indices of one query per grid cell and dominant normal direction.
-
-        The cell side is ``cell`` inside the query box and doubles with each
-        power-of-two ``band`` of distance outside it, as the records' spacing limit
-        grows.  Cells are hashed to one 64-bit key (a collision only merges two cells
-        for one pass; the next pass picks the other).  In each cell the query nearest
-        the centre is taken, and picks come in key order, so the records made depend
-        on the queries' positions, not on their order.
-        """
-        axis = np.argmax(np.abs(N), axis=1)
-        sign = np.take_along_axis(N, axis[:, None], axis=1)[:, 0] > 0
-        size = cell * np.exp2(band.astype(np.float64))
-        scaled = P / size[:, None]
-        ijk = np.floor(scaled).astype(np.int64)
-        key = (ijk[:, 0] * np.int64(73856093)) ^ (ijk[:, 1] * np.int64(19349663)) ^ (ijk[:, 2] * np.int64(83492791))
-        key = key * np.int64(64) + (axis * 2 + sign) * np.int64(8) + np.minimum(band, 7)
-        # the query nearest its cell's centre, picks in key order: the choice depends on
-        # where the queries are, not on the order they came in
-        off_centre = np.sum((scaled - ijk - 0.5) ** 2, axis=1)
-        order = np.lexsort((off_centre, key))
-        first = np.ones(len(order), bool)
-        first[1:] = key[order[1:]] != key[order[:-1]]
-        return order[first]
-
     def place_level(self, k, P, Ns, Ng, stats: RunStats):
         """Make the records of level k that the queries (P, Ns, Ng) need.
 
@@ -396,7 +365,7 @@ class Integrator:
         else:
             todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
-        band = self._distance_band(P[todo]) if len(todo) else np.zeros(0, np.int64)
+        band = distance_bands(P[todo], *self._roi, self.max_spacing)
         cell = 2.0 * lv.accuracy * self.max_spacing
         passes = 0
         while len(todo):
@@ -404,7 +373,7 @@ class Integrator:
             if passes >= MAX_PASSES:
                 local = np.arange(len(todo))
             else:
-                local = self._spread_subset(P[todo], Ns[todo], band, cell)
+                local = pick_per_cell(P[todo], Ns[todo], band, cell)
             pick = todo[local]
             rng = self._rng(_TAG_HEMISPHERE, k, lv.count)
             R0 = self._evaluate_hemispheres(k, P[pick], Ns[pick], Ng[pick], pending, rng)

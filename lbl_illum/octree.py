@@ -21,7 +21,9 @@ descends into a child only when that box contains P.  This is exact — a record
 serves only queries inside its domain, which lies inside every box on its path —
 and tighter than the grown cube (which it implies), so a query far from all records
 stops at the root.  Nodes are arrays: centre, half side, domain box, eight child
-indices (-1: none) and the head of a singly linked list of records.
+indices (-1: none) and the head of a singly linked list of records.  For lookups the
+tree is frozen (:func:`freeze`): each node's records are laid out contiguously, one
+64-byte row (P, N, R, a R) each, so a record test reads one cache line.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "insert_records", "lookup", "weight_terms"]
+__all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "insert_records", "freeze", "lookup"]
 
 #: Records at most this far (relative to R_i) behind the query's tangent plane still count as level.
 FRONT_TOLERANCE = 1e-3
@@ -38,21 +40,6 @@ MAX_DEPTH = 48
 #: Smallest error estimate used in a weight: a query on a record gets weight 1e6, not a
 #: value decided by round-off in sqrt(1 − N·N_i).
 MIN_ERROR = 1e-6
-
-
-@njit(cache=True, inline="always")
-def weight_terms(px, py, pz, nx, ny, nz, P, N, R, i):
-    """(ε_i, d_i) of Eqs. 5 and 6 for record ``i`` and the query (p, n)."""
-    dx = px - P[i, 0]
-    dy = py - P[i, 1]
-    dz = pz - P[i, 2]
-    dist = np.sqrt(dx * dx + dy * dy + dz * dz)
-    ndot = nx * N[i, 0] + ny * N[i, 1] + nz * N[i, 2]
-    if ndot > 1.0:
-        ndot = 1.0
-    err = dist / R[i] + np.sqrt(1.0 - ndot)
-    front = 0.5 * (dx * (nx + N[i, 0]) + dy * (ny + N[i, 1]) + dz * (nz + N[i, 2]))
-    return err, front
 
 
 @njit(cache=True)
@@ -108,13 +95,43 @@ def insert_records(start, stop, P, R, accuracy, rec_next, node_center, node_half
     return n_nodes, stop
 
 
-@njit(cache=True, parallel=True)
-def lookup(qP, qN, P, N, E, R, accuracy, rec_next, node_center, node_half, node_child, node_first,
-           node_lo, node_hi, out_E, out_w, out_n):
-    """Interpolate (Eq. 5) the records valid at each query.
+@njit(cache=True)
+def freeze(n_nodes, node_first, rec_next, P, N, R, accuracy, node_lo, node_hi,
+           node_start, node_count, node_box, perm, packed):
+    """Lay the records out for lookups: contiguous per node, one 64-byte row each.
 
-    For query q: ``out_E[q] = Σ w_i E_i / Σ w_i`` over the set S, ``out_w[q] = Σ w_i``
-    and ``out_n[q] = |S|``.  A query with ``out_n[q] == 0`` is not covered.
+    ``packed[j] = (P, N, R, a R)`` of record ``perm[j]``; the records of a node are
+    ``node_start[node] : node_start[node] + node_count[node]``, in the order of its
+    list.  ``node_box[node]`` is the node's domain box (lo, hi).
+    """
+    pos = 0
+    for node in range(n_nodes):
+        node_start[node] = pos
+        for c in range(3):
+            node_box[node, c] = node_lo[node, c]
+            node_box[node, 3 + c] = node_hi[node, c]
+        i = node_first[node]
+        while i >= 0:
+            perm[pos] = i
+            for c in range(3):
+                packed[pos, c] = P[i, c]
+                packed[pos, 3 + c] = N[i, c]
+            packed[pos, 6] = R[i]
+            packed[pos, 7] = accuracy * R[i]
+            pos += 1
+            i = rec_next[i]
+        node_count[node] = pos - node_start[node]
+
+
+@njit(cache=True, parallel=True)
+def lookup(qP, qN, packed, E, node_start, node_count, node_child, node_box, accuracy, out_E, out_w, out_n):
+    """Interpolate (Eq. 5) the records valid at each query, on a :func:`freeze` layout.
+
+    ``E`` holds the records' irradiance in the frozen order.  For query q:
+    ``out_E[q] = Σ w_i E_i / Σ w_i`` over the set S, ``out_w[q] = Σ w_i`` and
+    ``out_n[q] = |S|``.  A query with ``out_n[q] == 0`` is not covered.  A record
+    farther than a R_i is rejected before Eq. 5 is evaluated (its ε_i ≥ |P − P_i|/R_i
+    ≥ a); the margin keeps that cheap test from ever deciding a boundary case.
     """
     nq = qP.shape[0]
     n_blocks = min(nq, 256)
@@ -129,30 +146,40 @@ def lookup(qP, qN, P, N, E, R, accuracy, rec_next, node_center, node_half, node_
             s2 = 0.0
             count = 0
             top = 0
-            if (node_lo[0, 0] <= px <= node_hi[0, 0] and node_lo[0, 1] <= py <= node_hi[0, 1]
-                    and node_lo[0, 2] <= pz <= node_hi[0, 2]):
+            if (node_box[0, 0] <= px <= node_box[0, 3] and node_box[0, 1] <= py <= node_box[0, 4]
+                    and node_box[0, 2] <= pz <= node_box[0, 5]):
                 stack[0] = 0
                 top = 1
             while top > 0:
                 top -= 1
                 node = stack[top]
-                i = node_first[node]
-                while i >= 0:
-                    err, front = weight_terms(px, py, pz, nx, ny, nz, P, N, R, i)
-                    if err < accuracy and front >= -FRONT_TOLERANCE * R[i]:
+                start = node_start[node]
+                for j in range(start, start + node_count[node]):
+                    dx = px - packed[j, 0]
+                    dy = py - packed[j, 1]
+                    dz = pz - packed[j, 2]
+                    d2 = dx * dx + dy * dy + dz * dz
+                    reach = packed[j, 7]
+                    if d2 > reach * reach * (1.0 + 1e-9):
+                        continue
+                    ndot = nx * packed[j, 3] + ny * packed[j, 4] + nz * packed[j, 5]
+                    if ndot > 1.0:
+                        ndot = 1.0
+                    err = np.sqrt(d2) / packed[j, 6] + np.sqrt(1.0 - ndot)
+                    front = 0.5 * (dx * (nx + packed[j, 3]) + dy * (ny + packed[j, 4]) + dz * (nz + packed[j, 5]))
+                    if err < accuracy and front >= -FRONT_TOLERANCE * packed[j, 6]:
                         w = 1.0 / max(err, MIN_ERROR)
                         sw += w
-                        s0 += w * E[i, 0]
-                        s1 += w * E[i, 1]
-                        s2 += w * E[i, 2]
+                        s0 += w * E[j, 0]
+                        s1 += w * E[j, 1]
+                        s2 += w * E[j, 2]
                         count += 1
-                    i = rec_next[i]
                 for c in range(8):
                     child = node_child[node, c]
                     if child >= 0:
-                        if (node_lo[child, 0] <= px <= node_hi[child, 0]
-                                and node_lo[child, 1] <= py <= node_hi[child, 1]
-                                and node_lo[child, 2] <= pz <= node_hi[child, 2]):
+                        if (node_box[child, 0] <= px <= node_box[child, 3]
+                                and node_box[child, 1] <= py <= node_box[child, 4]
+                                and node_box[child, 2] <= pz <= node_box[child, 5]):
                             stack[top] = child
                             top += 1
             out_w[q] = sw
