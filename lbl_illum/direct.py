@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .geometry import TriangleSampler
 from .materials import LIGHT, MaterialTable
 from .raycast import Tracer
 from .sun import Sun
@@ -30,22 +31,16 @@ class DirectLight:
         self.tracer = tracer
         self.sun = sun if (sun is not None and sun.is_up) else None
         tri = tracer.triangles
-        is_light = materials.kind[tri.material] == LIGHT
-        self.light_ids = np.flatnonzero(is_light)
-        if len(self.light_ids):
-            self.light_vertices = tri.vertices[self.light_ids]
-            self.light_normals = tri.normals[self.light_ids]
-            self.light_luminance = materials.luminance[tri.material[self.light_ids]]
-            area = tri.areas[self.light_ids]
-            power = area * np.maximum(self.light_luminance.mean(axis=1), 0.0)
-            self.light_area = area
-            self.light_prob = power / power.sum() if power.sum() > 0 else area / area.sum()
-            self.light_cdf = np.cumsum(self.light_prob)
-            self.light_cdf[-1] = 1.0
+        light_ids = np.flatnonzero(materials.kind[tri.material] == LIGHT)
+        self.lights = None
+        if len(light_ids):
+            self.light_luminance = materials.luminance[tri.material[light_ids]]
+            power = tri.areas[light_ids] * np.maximum(self.light_luminance.mean(axis=1), 0.0)
+            self.lights = TriangleSampler(tri, light_ids, power)
 
     @property
     def has_lights(self) -> bool:
-        return len(self.light_ids) > 0
+        return self.lights is not None
 
     @property
     def is_dark(self) -> bool:
@@ -78,26 +73,18 @@ class DirectLight:
 
     def _light_sample(self, points, origins, normals, rng):
         n = len(points)
-        tri = np.searchsorted(self.light_cdf, rng.random(n), side="right")
-        tri = np.minimum(tri, len(self.light_ids) - 1)
-        u, v = rng.random(n), rng.random(n)
-        flip = u + v > 1.0
-        u = np.where(flip, 1.0 - u, u)
-        v = np.where(flip, 1.0 - v, v)
-        V = self.light_vertices[tri]
-        x = V[:, 0] + u[:, None] * (V[:, 1] - V[:, 0]) + v[:, None] * (V[:, 2] - V[:, 0])
+        tri, x, pdf_area = self.lights.sample(rng, n)
         w = x - origins
         dist = np.linalg.norm(w, axis=1)
         ok = dist > 0
         w[ok] /= dist[ok, None]
         cos_r = np.einsum("ij,ij->i", normals, w)
-        cos_l = np.abs(np.einsum("ij,ij->i", self.light_normals[tri], w))
+        cos_l = np.abs(np.einsum("ij,ij->i", self.lights.normals[tri], w))
         use = np.flatnonzero(ok & (cos_r > 0.0) & (cos_l > 0.0))
         E = np.zeros((n, 3))
         if len(use) == 0:
             return E
-        pdf_area = self.light_prob[tri[use]] / self.light_area[tri[use]]
-        geom = cos_r[use] * cos_l[use] / (dist[use] ** 2 * pdf_area)
+        geom = cos_r[use] * cos_l[use] / (dist[use] ** 2 * pdf_area[use])
         tmax = dist[use] * (1.0 - 1e-6) - 1e-9
         T = self.tracer.transmittance(origins[use], w[use], tmax)
         E[use] = self.light_luminance[tri[use]] * geom[:, None] * T

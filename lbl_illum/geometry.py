@@ -22,7 +22,7 @@ __all__ = [
     "Triangles", "MeshPart", "Shape", "SHAPE_KEYS", "SPHERE_SUBDIVISIONS", "SPHERE_MAX_DEVIATION",
     "PLANAR_TOLERANCE", "load_mesh_file", "shape_from_table", "sphere_triangles", "box_triangles",
     "rectangle_triangles", "polygon_triangles", "triangulate_polygon", "degenerate_mask",
-    "duplicate_mask",
+    "duplicate_mask", "TriangleSampler",
 ]
 
 
@@ -452,3 +452,71 @@ def duplicate_mask(vertices: np.ndarray) -> np.ndarray:
 #: Odd 64-bit constants of the triangle hash in :func:`duplicate_mask`.
 _HASH_MULTIPLIERS = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
 _HASH_MIX = np.uint64(0xFF51AFD7ED558CCD)
+
+
+class TriangleSampler:
+    """Points on a set of triangles, each chosen with probability ∝ ``weight`` (default:
+    area) and uniform on it: the area density at a sampled point is ``prob / area``.
+
+    Used for light surfaces (direct light) and window portals (indirect light).
+
+    Reference: Pharr, Jakob & Humphreys, *Physically Based Rendering*, 4th ed., §6.5.4.
+    """
+
+    def __init__(self, triangles: Triangles, ids: np.ndarray, weight: np.ndarray | None = None):
+        self.ids = np.asarray(ids, np.int64)
+        self.vertices = triangles.vertices[self.ids]
+        self.normals = triangles.normals[self.ids]
+        self.area = triangles.areas[self.ids]
+        w = self.area if weight is None or np.sum(weight) <= 0 else np.asarray(weight, np.float64)
+        self.prob = w / w.sum()
+        self.cdf = np.cumsum(self.prob)
+        self.cdf[-1] = 1.0
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def sample(self, rng: np.random.Generator, n: int):
+        """``(index, points, pdf_area)``: (n,) index into ``ids``, (n, 3) points [m], (n,) [1/m²]."""
+        return self._place(rng.random(n), rng.random(n))
+
+    def sample_stratified(self, rng: np.random.Generator, groups: int, per: int):
+        """Like :meth:`sample`, ``groups`` sets of ``gx · gy ≈ per`` points, each set a
+        jittered gx × gy grid over the unit square mapped onto the triangles (the area
+        CDF along one axis, the square-to-triangle map within a triangle), so every set
+        covers the triangles evenly.  Returns ``(index, points, pdf_area, count)`` with
+        ``count = gx · gy`` points per set, sets one after another.
+        """
+        gx, gy = self.grid(per)
+        i = np.repeat(np.arange(gx), gy)[None, :]
+        j = np.tile(np.arange(gy), gx)[None, :]
+        a = ((i + rng.random((groups, gx * gy))) / gx).ravel()
+        b = ((j + rng.random((groups, gx * gy))) / gy).ravel()
+        k, x, pdf = self._place(a, b, square=True)
+        return k, x, pdf, gx * gy
+
+    @staticmethod
+    def grid(per: int) -> tuple[int, int]:
+        """(gx, gy) of the stratified sets of :meth:`sample_stratified`."""
+        gx = max(1, int(round(np.sqrt(per))))
+        return gx, max(1, int(round(per / gx)))
+
+    def pdf_area(self, k: np.ndarray) -> np.ndarray:
+        """Area density [1/m²] of points on sampled triangle(s) ``k`` (index into ``ids``)."""
+        return self.prob[k] / self.area[k]
+
+    def _place(self, a, b, square=False):
+        k = np.minimum(np.searchsorted(self.cdf, a, side="right"), len(self.ids) - 1)
+        V = self.vertices[k]
+        if square:
+            # position of a within triangle k's stretch of the CDF, then the
+            # continuous square-to-triangle map (1 - √a', √a' (1 - b), √a' b)
+            start = self.cdf[k] - self.prob[k]
+            s = np.sqrt(np.clip((a - start) / self.prob[k], 0.0, 1.0))
+            u, v = s * (1.0 - b), s * b
+        else:
+            flip = a + b > 1.0
+            u = np.where(flip, 1.0 - a, a)
+            v = np.where(flip, 1.0 - b, b)
+        x = V[:, 0] + u[:, None] * (V[:, 1] - V[:, 0]) + v[:, None] * (V[:, 2] - V[:, 0])
+        return k, x, self.pdf_area(k)

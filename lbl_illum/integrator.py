@@ -57,7 +57,8 @@ from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
 from .options import Options
 from .placement import distance_bands, pick_per_cell
 from .photometry import luminance
-from .raycast import Tracer
+from .geometry import TriangleSampler
+from .raycast import Hits, Tracer
 from .scene import Scene
 
 __all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint"]
@@ -71,6 +72,8 @@ QUERY_LIGHT_SAMPLES = 16
 #: error against a converged reference: 12,043 against 5,026 level-2 records.)
 MAX_SPACING_FRACTION = 0.5
 SPACING_RATIO = 16.0
+#: Portal samples per primary evaluation, as a fraction of its hemisphere samples.
+PORTAL_SAMPLE_FRACTION = 0.5
 #: Passes of placement before all remaining uncovered queries are taken at once.
 MAX_PASSES = 64
 
@@ -169,6 +172,10 @@ class Integrator:
         self.direct = DirectLight(self.tracer, self.materials, scene.sun)
         self.sky = scene.sky
         self.sun = self.direct.sun
+        portal_ids = np.flatnonzero(self.materials.portal[scene.triangles.material])
+        self.portals = TriangleSampler(scene.triangles, portal_ids) if len(portal_ids) else None
+        self._portal_index = np.full(len(scene.triangles), -1, np.int64)
+        self._portal_index[portal_ids] = np.arange(len(portal_ids))
         self.fingerprint = scene_fingerprint(scene, self.options)
         self.progress = progress
         B = self.options.bounces
@@ -225,8 +232,14 @@ class Integrator:
         return max_spacing / SPACING_RATIO, max_spacing
 
     # -- hemisphere rays ----------------------------------------------------------------
-    def trace_paths(self, origins, directions, rng):
+    def trace_paths(self, origins, directions, rng, through=None, portal_mis=None):
         """Follow rays through specular surfaces to the sky, a light or a diffuse surface.
+
+        ``through`` (n, 3) is each ray's starting throughput (default 1).
+        ``portal_mis = (normals, S, n_p)`` marks hemisphere rays (S per point, cosine
+        density about ``normals``) that share their points with ``n_p`` portal samples:
+        a ray whose first hit is a portal and that goes through it carries the balance
+        heuristic weight S p_h / (S p_h + n_p p_p) (see :meth:`_portal_samples`).
 
         Returns ``(first_t, radiance, hits)``: (n,) first-hit distance (inf to the sky),
         (n, 3) radiance already known (sky, lights seen by reflection), and the diffuse
@@ -239,7 +252,7 @@ class Integrator:
         ray = np.arange(n)
         o = np.asarray(origins, np.float64)
         d = np.asarray(directions, np.float64)
-        through = np.ones((n, 3))
+        through = np.ones((n, 3)) if through is None else np.array(through, np.float64)
         reflected = np.zeros(n, bool)
         out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
         for depth in range(MAX_SPECULAR_DEPTH + 1):
@@ -295,6 +308,13 @@ class Integrator:
                               rho / np.maximum(p_r, 1e-300)[:, None]) * safe
             new_through = through[s_hit] * factor
             alive = keep & (new_through.max(axis=1) > 0.0)
+            if portal_mis is not None and depth == 0:
+                through_portal = np.flatnonzero(transmit & mats.portal[s_mat])
+                if len(through_portal):
+                    normals, S, n_p = portal_mis
+                    sel = s_hit[through_portal]
+                    w = self._hemisphere_weight(normals[ray[sel]], d[sel], hits.t[sel], hits.prim[sel], S, n_p)
+                    new_through[through_portal] *= w[:, None]
             ray = ray[s_hit][alive]
             o = self.tracer.offset(P[spec][alive], side[alive])
             d = new_d[alive]
@@ -315,11 +335,23 @@ class Integrator:
         r = len(P)
         dirs = stratified_directions(Ns, m, n, rng).reshape(-1, 3)
         origins = np.repeat(self.tracer.offset(P, Ng), S, axis=0)
-        first_t, radiance, hits = self.trace_paths(origins, dirs, rng)
+        n_p = 0
+        if self.portals is not None:
+            gx, gy = self.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
+            n_p = gx * gy
+        mis = (np.repeat(Ns, S, axis=0), S, n_p) if n_p else None
+        first_t, radiance, hits = self.trace_paths(origins, dirs, rng, portal_mis=mis)
+        known = radiance.reshape(r, S, 3).sum(axis=1)
         owner_local = hits["ray"] // S
+        if self.portals is not None:
+            p_known, p_hits, p_owner = self._portal_samples(P, Ns, Ng, S, rng)
+            known += p_known
+            hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng", "weight")}
+            owner_local = np.concatenate([owner_local, p_owner])
         if k == self.options.bounces:
             if self.options.ambient > 0 and len(owner_local):
-                np.add.at(radiance, hits["ray"], hits["weight"] * self.options.ambient)
+                for c in range(3):
+                    known[:, c] += self.options.ambient * np.bincount(owner_local, hits["weight"][:, c], minlength=r)
         else:
             base = sum(len(x) for x in pending.records)
             pending.hit_P.append(hits["P"])
@@ -327,11 +359,69 @@ class Integrator:
             pending.hit_Ng.append(hits["Ng"])
             pending.hit_weight.append(hits["weight"])
             pending.hit_owner.append(owner_local + base)
-        pending.known.append(radiance.reshape(r, S, 3).sum(axis=1))
+        pending.known.append(known)
         pending.samples.append(np.full(r, S))
         inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
         with np.errstate(divide="ignore"):
             return np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
+
+    def _portal_density(self, directions, t, prim):
+        """Solid-angle density [1/sr] of drawing ``directions`` by portal sampling, for
+        rays whose first hit is portal triangle ``prim`` at distance ``t``."""
+        k = self._portal_index[prim]
+        cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[k], directions))
+        return self.portals.pdf_area(k) * t * t / np.maximum(cos_p, 1e-300)
+
+    def _hemisphere_weight(self, normals, directions, t, prim, S, n_p):
+        """Balance-heuristic weight of hemisphere rays that go through a portal."""
+        p_h = S * np.maximum(np.einsum("ij,ij->i", normals, directions), 0.0) / np.pi
+        p_p = n_p * self._portal_density(directions, t, prim)
+        return p_h / np.maximum(p_h + p_p, 1e-300)
+
+    def _portal_samples(self, P, Ns, Ng, S, rng):
+        """Light through the portals seen from (P, Ns): the paper's §5 advice that large
+        sources belong in the indirect step, sampled well.
+
+        Each point gets about ``PORTAL_SAMPLE_FRACTION · S`` points on the portals,
+        stratified over their area.  A sample counts only if the first surface its ray
+        meets is the portal triangle it was drawn on; through the pane it carries τ and
+        continues like any ray (sky, ground, deeper levels).  Hemisphere rays through
+        portals and portal samples are combined by the balance heuristic of multiple
+        importance sampling (Veach, "Robust Monte Carlo Methods for Light Transport
+        Simulation", 1997, §9.2): a sample in direction ω counts f(ω) / (S p_h + n_p p_p)
+        with p_h = cos θ / π and p_p the portal density, so cosine sampling carries the
+        light near a window and area sampling the small distant windows.  Values are
+        scaled by S/π to join the hemisphere sums of Eq. 2.
+
+        Returns ``(known, hits, owner)`` like the hemisphere part.
+        """
+        r = len(P)
+        tri, x, pdf_area, n_p = self.portals.sample_stratified(
+            rng, r, max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
+        owner = np.repeat(np.arange(r), n_p)
+        o = np.repeat(self.tracer.offset(P, Ng), n_p, axis=0)
+        w = x - o
+        dist = np.linalg.norm(w, axis=1)
+        w /= np.maximum(dist, 1e-300)[:, None]
+        cos_r = np.einsum("ij,ij->i", Ns[owner], w)
+        use = np.flatnonzero((cos_r > 0.0) & (dist > 0.0))
+        hits = self.tracer.intersect(o[use], w[use])
+        first = hits.prim == self.portals.ids[tri[use]]
+        use = use[first]
+        known = np.zeros((r, 3))
+        empty = {"P": np.zeros((0, 3)), "Ns": np.zeros((0, 3)), "Ng": np.zeros((0, 3)), "weight": np.zeros((0, 3))}
+        if len(use) == 0:
+            return known, empty, np.zeros(0, np.int64)
+        sub = Hits(hits.t[first], hits.prim[first])
+        Pp, Ngp, _ = self.tracer.surface(o[use], w[use], sub, np.arange(len(use)))
+        tau = self.materials.transmittance[self.scene.triangles.material[sub.prim]]
+        p_p = n_p * self._portal_density(w[use], sub.t, sub.prim)
+        p_h = S * cos_r[use] / np.pi
+        through = tau * (cos_r[use] * S / np.pi / (p_h + p_p))[:, None]
+        _, radiance, p_hits = self.trace_paths(self.tracer.offset(Pp, -Ngp), w[use], rng, through=through)
+        for c in range(3):
+            known[:, c] = np.bincount(owner[use], radiance[:, c], minlength=r)
+        return known, {key: p_hits[key] for key in empty}, owner[use][p_hits["ray"]]
 
     def _clamp_radius(self, R0, P):
         lo_box, hi_box = self._roi

@@ -5,7 +5,8 @@ type       behaviour                                                    keys
 =========  ===========================================================  ==============================
 diffuse    Lambertian reflector, radiance L = ρ E / π                   ``reflectance`` ρ (0…1)
 glass      thin clear pane: specular transmission and reflection        ``transmittance`` τ_n (0…1),
-                                                                        ``reflectance`` (optional)
+                                                                        ``reflectance`` (optional),
+                                                                        ``portal`` (true/false)
 mirror     specular reflector                                           ``reflectance`` (0…1)
 light      Lambertian emitter, counted by the direct calculation only  ``luminance`` [cd/m²]
 =========  ===========================================================  ==============================
@@ -16,6 +17,10 @@ every angle (angle-dependent glazing is a later extension).  When a glass's refl
 is not given it is that of a thin pane of refractive index 1.52 with the stated
 transmittance (two Fresnel interfaces at normal incidence with internal absorption,
 the model of Radiance's ``glass``).
+
+``portal = true`` marks a window whose area the indirect calculation samples directly
+(the paper's §5: large sources such as the sky seen through a window belong in the
+indirect step, sampled well); see :mod:`lbl_illum.integrator`.
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ DIFFUSE, GLASS, MIRROR, LIGHT = 0, 1, 2, 3
 KIND_CODES = {"diffuse": DIFFUSE, "glass": GLASS, "mirror": MIRROR, "light": LIGHT}
 _KEYS = {
     "diffuse": ("type", "reflectance"),
-    "glass": ("type", "transmittance", "reflectance"),
+    "glass": ("type", "transmittance", "reflectance", "portal"),
     "mirror": ("type", "reflectance"),
     "light": ("type", "luminance"),
 }
@@ -49,6 +54,7 @@ class Material:
     reflectance: tuple = (0.0, 0.0, 0.0)        # ρ (diffuse, mirror, glass surface reflection)
     transmittance: tuple = (0.0, 0.0, 0.0)      # τ (glass)
     luminance: tuple = (0.0, 0.0, 0.0)          # emitted luminance [cd/m²] (light)
+    portal: bool = False                        # glass sampled by area in the indirect step
 
     @property
     def code(self) -> int:
@@ -95,7 +101,10 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
     for t, r in zip(tau, rho):
         if t + r > 1.0 + 1e-12:
             raise InputError(f"{where}: transmittance + reflectance must not exceed 1")
-    return Material(name, kind, reflectance=rho, transmittance=tau)
+    portal = table.get("portal", False)
+    if not isinstance(portal, bool):
+        raise InputError(f"{where}: 'portal' must be true or false, got {portal!r}")
+    return Material(name, kind, reflectance=rho, transmittance=tau, portal=portal)
 
 
 @dataclass
@@ -106,6 +115,7 @@ class MaterialTable:
     reflectance: np.ndarray     # (m, 3) float64
     transmittance: np.ndarray   # (m, 3) float64
     luminance: np.ndarray       # (m, 3) float64 [cd/m²]
+    portal: np.ndarray          # (m,) bool, glass sampled by area in the indirect step
 
     @classmethod
     def from_materials(cls, materials: list[Material]) -> "MaterialTable":
@@ -114,4 +124,5 @@ class MaterialTable:
             reflectance=np.array([m.reflectance for m in materials], dtype=np.float64).reshape(-1, 3),
             transmittance=np.array([m.transmittance for m in materials], dtype=np.float64).reshape(-1, 3),
             luminance=np.array([m.luminance for m in materials], dtype=np.float64).reshape(-1, 3),
+            portal=np.array([m.portal for m in materials], dtype=bool),
         )
