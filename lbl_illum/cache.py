@@ -12,7 +12,7 @@ it can be saved and loaded, and the same records always give the same answers,
 whatever order they were made in.
 
 File format (``.npz``, version 1): arrays ``L{k}_P``, ``L{k}_N``, ``L{k}_E``,
-``L{k}_R`` per level and a ``header`` holding JSON: ``format``, ``version``,
+``L{k}_R``, ``L{k}_Gr``, ``L{k}_Gt`` (rotational and translational gradients) per level and a ``header`` holding JSON: ``format``, ``version``,
 ``fingerprint`` (of the scene and the settings that the records depend on),
 ``accuracy`` per level, ``records`` per level, ``center`` and ``half`` of the octree's
 root cube [m], and ``checksum``, the SHA-256 of the record arrays.
@@ -52,6 +52,8 @@ class LevelRecords:
         self.N = np.zeros((capacity, 3), np.float32)
         self.E = np.zeros((capacity, 3), np.float32)
         self.R = np.zeros(capacity, np.float32)
+        self.Gr = np.zeros((capacity, 3, 3), np.float32)   # rotational gradient [lux/rad]
+        self.Gt = np.zeros((capacity, 3, 3), np.float32)   # translational gradient [lux/m]
         self._next = np.full(capacity, -1, np.int32)
         self._tree_version = 0
         self._frozen = None
@@ -75,7 +77,7 @@ class LevelRecords:
         if needed <= cap:
             return
         new = max(needed, 2 * cap)
-        for name in ("P", "N", "E", "R", "_next"):
+        for name in ("P", "N", "E", "R", "Gr", "Gt", "_next"):
             old = getattr(self, name)
             arr = np.zeros((new,) + old.shape[1:], old.dtype)
             arr[: self.count] = old[: self.count]
@@ -111,8 +113,9 @@ class LevelRecords:
             if start < stop:
                 self._grow_nodes()
 
-    def add(self, P, N, R, E=None) -> np.ndarray:
-        """Append records (E defaults to zero, to be set once evaluated); return their indices."""
+    def add(self, P, N, R, E=None, Gr=None, Gt=None) -> np.ndarray:
+        """Append records (E and the gradients default to zero, to be set once evaluated);
+        return their indices."""
         P = np.asarray(P, np.float64).reshape(-1, 3)
         k = len(P)
         start = self.count
@@ -121,6 +124,8 @@ class LevelRecords:
         self.N[start:start + k] = N
         self.R[start:start + k] = R
         self.E[start:start + k] = 0.0 if E is None else E
+        self.Gr[start:start + k] = 0.0 if Gr is None else Gr
+        self.Gt[start:start + k] = 0.0 if Gt is None else Gt
         self.count = start + k
         if k and self.accuracy > 0:
             if not np.all(self._contains(P)):
@@ -132,8 +137,9 @@ class LevelRecords:
         return np.arange(start, start + k)
 
     # -- queries -----------------------------------------------------------------
-    def lookup(self, P, N):
-        """Interpolated irradiance at queries (Eq. 5).
+    def lookup(self, P, N, gradients: bool = False):
+        """Interpolated irradiance at queries (Eq. 5); with ``gradients`` each record's
+        value is first extrapolated to the query by its gradients (Ward & Heckbert 1992).
 
         Returns ``(E, weight_sum, count)``: (n, 3) float64, (n,) float64, (n,) int32;
         ``count == 0`` marks a query no record covers.
@@ -146,8 +152,8 @@ class LevelRecords:
         out_n = np.zeros(n, np.int32)
         if n and self.count and self.accuracy > 0:
             perm, start, count, box, packed = self._frozen_tree()
-            octree.lookup(P, N, packed, self.E[perm], start, count, self.node_child, box, self.accuracy,
-                          out_E, out_w, out_n)
+            octree.lookup(P, N, packed, self.E[perm], self.Gr[perm], self.Gt[perm], gradients, start, count,
+                          self.node_child, box, self.accuracy, out_E, out_w, out_n)
         return out_E, out_w, out_n
 
     def _frozen_tree(self):
@@ -166,7 +172,7 @@ class LevelRecords:
 
     def arrays(self) -> dict:
         n = self.count
-        return {"P": self.P[:n].copy(), "N": self.N[:n].copy(), "E": self.E[:n].copy(), "R": self.R[:n].copy()}
+        return {name: getattr(self, name)[:n].copy() for name in ("P", "N", "E", "R", "Gr", "Gt")}
 
 
 class IrradianceCache:
@@ -243,5 +249,6 @@ class IrradianceCache:
         for k, lv in enumerate(cache.levels):
             P = arrays[f"L{k}_P"]
             if len(P):
-                lv.add(P, arrays[f"L{k}_N"], arrays[f"L{k}_R"], arrays[f"L{k}_E"])
+                lv.add(P, arrays[f"L{k}_N"], arrays[f"L{k}_R"], arrays[f"L{k}_E"], arrays[f"L{k}_Gr"],
+                       arrays[f"L{k}_Gt"])
         return cache

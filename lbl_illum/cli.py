@@ -92,6 +92,9 @@ def _build_parser() -> argparse.ArgumentParser:
     q.add_argument("--no-bounce-scaling", action="store_true",
                    help="keep a and samples the same at every level (§3.4 scaling off)")
     q.add_argument("--seed", type=_positive_int, metavar="S", help="random seed (default 0)")
+    q.add_argument("--interpolation", choices=("paper", "gradients"),
+                   help="Eq. 5 as published, or over values extrapolated by each record's irradiance "
+                        "gradients (Ward & Heckbert 1992; default)")
     r = p.add_argument_group("files")
     r.add_argument("--cache", metavar="FILE", help="read records from FILE if it exists; write all records back")
     r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
@@ -116,6 +119,7 @@ def _run_illuminance(args) -> int:
     options = scene.options.replace(
         accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
         min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
+        interpolation=args.interpolation,
         bounce_scaling=False if args.no_bounce_scaling else None)
     points, normals = read_points(args.points, scene.unit_scale)
     if not args.quiet:

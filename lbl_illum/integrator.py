@@ -52,7 +52,7 @@ import numpy as np
 
 from .cache import IrradianceCache, LevelRecords
 from .direct import DirectLight
-from .hemisphere import cell_counts, cosine_directions, stratified_directions
+from .hemisphere import cell_counts, cosine_directions, irradiance_gradients, stratified_directions
 from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
 from .options import Options
 from .placement import distance_bands, pick_per_cell
@@ -146,6 +146,13 @@ class _Pending:
     hit_Ng: list = field(default_factory=list)
     hit_weight: list = field(default_factory=list)  # throughput · ρ / π
     hit_owner: list = field(default_factory=list)   # index into the concatenated records
+    hit_ray: list = field(default_factory=list)     # hemisphere ray of the hit, -1 for portal samples
+    # per hemisphere ray, kept for the irradiance gradients (levels that interpolate)
+    ray_L: list = field(default_factory=list)       # (r·S, 3) radiance known at trace time, unweighted
+    ray_mis: list = field(default_factory=list)     # (r·S,) MIS weight
+    ray_t: list = field(default_factory=list)       # (r·S,) first-hit distance
+    ray_dir: list = field(default_factory=list)     # (r·S, 3) direction
+    cells: tuple = (1, 1)                            # (M, N) of Eq. 2 at this level
 
     def cat(self, name, width=3, dtype=np.float64):
         """The parts of ``name`` as one array (concatenated once, then kept)."""
@@ -238,12 +245,14 @@ class Integrator:
         ``through`` (n, 3) is each ray's starting throughput (default 1).
         ``portal_mis = (normals, S, n_p)`` marks hemisphere rays (S per point, cosine
         density about ``normals``) that share their points with ``n_p`` portal samples:
-        a ray whose first hit is a portal and that goes through it carries the balance
+        a ray whose first hit is a portal and that goes through it gets the balance
         heuristic weight S p_h / (S p_h + n_p p_p) (see :meth:`_portal_samples`).
 
-        Returns ``(first_t, radiance, hits)``: (n,) first-hit distance (inf to the sky),
-        (n, 3) radiance already known (sky, lights seen by reflection), and the diffuse
-        hits as a dict of arrays ``ray, P, Ns, Ng, weight`` (weight = throughput ρ/π).
+        Returns ``(first_t, radiance, hits, mis)``: (n,) first-hit distance (inf to the
+        sky), (n, 3) radiance already known (sky, lights seen by reflection), the diffuse
+        hits as a dict of arrays ``ray, P, Ns, Ng, weight`` (weight = throughput ρ/π),
+        and (n,) the MIS weight of each ray (1 unless it went through a portal), which
+        the radiance and hit weights do not include.
         """
         mats = self.materials
         n = len(origins)
@@ -253,6 +262,7 @@ class Integrator:
         o = np.asarray(origins, np.float64)
         d = np.asarray(directions, np.float64)
         through = np.ones((n, 3)) if through is None else np.array(through, np.float64)
+        mis_weight = np.ones(n)
         reflected = np.zeros(n, bool)
         out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
         for depth in range(MAX_SPECULAR_DEPTH + 1):
@@ -313,8 +323,8 @@ class Integrator:
                 if len(through_portal):
                     normals, S, n_p = portal_mis
                     sel = s_hit[through_portal]
-                    w = self._hemisphere_weight(normals[ray[sel]], d[sel], hits.t[sel], hits.prim[sel], S, n_p)
-                    new_through[through_portal] *= w[:, None]
+                    mis_weight[ray[sel]] = self._hemisphere_weight(normals[ray[sel]], d[sel], hits.t[sel],
+                                                                   hits.prim[sel], S, n_p)
             ray = ray[s_hit][alive]
             o = self.tracer.offset(P[spec][alive], side[alive])
             d = new_d[alive]
@@ -324,7 +334,7 @@ class Integrator:
         if hits_out["ray"] is None:
             hits_out = {"ray": np.zeros(0, np.int64), "P": np.zeros((0, 3)), "Ns": np.zeros((0, 3)),
                         "Ng": np.zeros((0, 3)), "weight": np.zeros((0, 3))}
-        return first_t, radiance, hits_out
+        return first_t, radiance, hits_out, mis_weight
 
     # -- placement (top-down) ---------------------------------------------------------
     def _evaluate_hemispheres(self, k, P, Ns, Ng, pending: _Pending, rng):
@@ -336,29 +346,47 @@ class Integrator:
         dirs = stratified_directions(Ns, m, n, rng).reshape(-1, 3)
         origins = np.repeat(self.tracer.offset(P, Ng), S, axis=0)
         n_p = 0
-        if self.portals is not None:
+        # portal samples add rays per record; on the one-ray paths of accuracy 0 below
+        # the first level they would make every path branch, so those go without
+        path_level = k > 0 and self.cache.levels[k].accuracy == 0.0
+        if self.portals is not None and not path_level:
             gx, gy = self.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
             n_p = gx * gy
         mis = (np.repeat(Ns, S, axis=0), S, n_p) if n_p else None
-        first_t, radiance, hits = self.trace_paths(origins, dirs, rng, portal_mis=mis)
-        known = radiance.reshape(r, S, 3).sum(axis=1)
+        first_t, radiance, hits, ray_mis = self.trace_paths(origins, dirs, rng, portal_mis=mis)
+        known = (radiance * ray_mis[:, None]).reshape(r, S, 3).sum(axis=1)
         owner_local = hits["ray"] // S
-        if self.portals is not None:
-            p_known, p_hits, p_owner = self._portal_samples(P, Ns, Ng, S, rng)
+        ray_base = sum(len(x) for x in pending.ray_t)
+        hit_ray = hits["ray"] + ray_base
+        hemi_ray, hemi_weight = hits["ray"], hits["weight"]           # unweighted by MIS
+        hit_weight = hits["weight"] * ray_mis[hits["ray"], None]
+        if self.cache.levels[k].accuracy > 0:
+            pending.ray_L.append(radiance.astype(np.float32))
+            pending.ray_mis.append(ray_mis.astype(np.float32))
+            pending.ray_t.append(first_t.astype(np.float32))
+            pending.ray_dir.append(dirs.astype(np.float32))
+            pending.cells = (m, n)
+        if n_p:
+            p_known, p_hits, p_owner = self._portal_samples(P, Ns, Ng, S, n_p, rng)
             known += p_known
-            hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng", "weight")}
+            hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng")}
+            hit_weight = np.concatenate([hit_weight, p_hits["weight"]])
             owner_local = np.concatenate([owner_local, p_owner])
+            hit_ray = np.concatenate([hit_ray, np.full(len(p_owner), -1, np.int64)])
         if k == self.options.bounces:
             if self.options.ambient > 0 and len(owner_local):
                 for c in range(3):
-                    known[:, c] += self.options.ambient * np.bincount(owner_local, hits["weight"][:, c], minlength=r)
+                    known[:, c] += self.options.ambient * np.bincount(owner_local, hit_weight[:, c], minlength=r)
+                if pending.ray_L:   # the ambient value is part of each ray's radiance
+                    np.add.at(pending.ray_L[-1], hemi_ray, hemi_weight * self.options.ambient)
         else:
             base = sum(len(x) for x in pending.records)
             pending.hit_P.append(hits["P"])
             pending.hit_Ns.append(hits["Ns"])
             pending.hit_Ng.append(hits["Ng"])
-            pending.hit_weight.append(hits["weight"])
+            pending.hit_weight.append(hit_weight)
             pending.hit_owner.append(owner_local + base)
+            pending.hit_ray.append(hit_ray)
         pending.known.append(known)
         pending.samples.append(np.full(r, S))
         inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
@@ -378,12 +406,12 @@ class Integrator:
         p_p = n_p * self._portal_density(directions, t, prim)
         return p_h / np.maximum(p_h + p_p, 1e-300)
 
-    def _portal_samples(self, P, Ns, Ng, S, rng):
+    def _portal_samples(self, P, Ns, Ng, S, n_p, rng):
         """Light through the portals seen from (P, Ns): the paper's §5 advice that large
         sources belong in the indirect step, sampled well.
 
-        Each point gets about ``PORTAL_SAMPLE_FRACTION · S`` points on the portals,
-        stratified over their area.  A sample counts only if the first surface its ray
+        Each point gets ``n_p`` (about ``PORTAL_SAMPLE_FRACTION · S``) points on the
+        portals, stratified over their area.  A sample counts only if the first surface its ray
         meets is the portal triangle it was drawn on; through the pane it carries τ and
         continues like any ray (sky, ground, deeper levels).  Hemisphere rays through
         portals and portal samples are combined by the balance heuristic of multiple
@@ -396,8 +424,7 @@ class Integrator:
         Returns ``(known, hits, owner)`` like the hemisphere part.
         """
         r = len(P)
-        tri, x, pdf_area, n_p = self.portals.sample_stratified(
-            rng, r, max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
+        tri, x, pdf_area, n_p = self.portals.sample_stratified(rng, r, n_p)
         owner = np.repeat(np.arange(r), n_p)
         o = np.repeat(self.tracer.offset(P, Ng), n_p, axis=0)
         w = x - o
@@ -418,7 +445,7 @@ class Integrator:
         p_p = n_p * self._portal_density(w[use], sub.t, sub.prim)
         p_h = S * cos_r[use] / np.pi
         through = tau * (cos_r[use] * S / np.pi / (p_h + p_p))[:, None]
-        _, radiance, p_hits = self.trace_paths(self.tracer.offset(Pp, -Ngp), w[use], rng, through=through)
+        _, radiance, p_hits, _ = self.trace_paths(self.tracer.offset(Pp, -Ngp), w[use], rng, through=through)
         for c in range(3):
             known[:, c] = np.bincount(owner[use], radiance[:, c], minlength=r)
         return known, {key: p_hits[key] for key in empty}, owner[use][p_hits["ray"]]
@@ -489,7 +516,7 @@ class Integrator:
         lv = self.cache.levels[k]
         if own_record is not None:
             return lv.E[own_record].astype(np.float64)
-        E, _, count = lv.lookup(P, Ns)
+        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation == "gradients")
         return E
 
     def evaluate_level(self, k, pending: _Pending, next_answer):
@@ -500,6 +527,7 @@ class Integrator:
         records = np.concatenate(pending.records)
         known = pending.cat("known")
         S = pending.cat("samples", width=0, dtype=np.int64)
+        ray_L = pending.cat("ray_L").astype(np.float64) if pending.ray_L else None
         if k < self.options.bounces:
             hP, hNs, hNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
             weight = pending.cat("hit_weight")
@@ -511,8 +539,19 @@ class Integrator:
                 contrib = weight * E_hit
                 for c in range(3):
                     known[:, c] += np.bincount(owner, weights=contrib[:, c], minlength=len(records))
+                if ray_L is not None:   # each hemisphere ray's own radiance, without its MIS weight
+                    ray = pending.cat("hit_ray", width=0, dtype=np.int64)
+                    hemi = ray >= 0
+                    mis = pending.cat("ray_mis", width=0, dtype=np.float32)[ray[hemi]]
+                    np.add.at(ray_L, ray[hemi], contrib[hemi] / np.maximum(mis, 1e-12)[:, None])
                 self._tick()
         lv.E[records] = (np.pi / S)[:, None] * known
+        if ray_L is not None:
+            m, n = pending.cells
+            r = len(records)
+            lv.Gr[records], lv.Gt[records] = irradiance_gradients(
+                lv.N[records].astype(np.float64), pending.cat("ray_dir").reshape(r, m, n, 3).astype(np.float64),
+                ray_L.reshape(r, m, n, 3), pending.cat("ray_t", width=0, dtype=np.float32).reshape(r, m, n))
 
     # -- the whole calculation -----------------------------------------------------------
     def compute(self, points, normals) -> IlluminanceResult:

@@ -124,10 +124,13 @@ def freeze(n_nodes, node_first, rec_next, P, N, R, accuracy, node_lo, node_hi,
 
 
 @njit(cache=True, parallel=True)
-def lookup(qP, qN, packed, E, node_start, node_count, node_child, node_box, accuracy, out_E, out_w, out_n):
+def lookup(qP, qN, packed, E, Gr, Gt, gradients, node_start, node_count, node_child, node_box, accuracy,
+           out_E, out_w, out_n):
     """Interpolate (Eq. 5) the records valid at each query, on a :func:`freeze` layout.
 
-    ``E`` holds the records' irradiance in the frozen order.  For query q:
+    ``E``, ``Gr``, ``Gt`` hold the records' irradiance and gradients in the frozen
+    order.  With ``gradients`` a record contributes E_i + (N_i × N)·∇_r E_i +
+    (P − P_i)·∇_t E_i (Ward & Heckbert 1992), each channel kept ≥ 0.  For query q:
     ``out_E[q] = Σ w_i E_i / Σ w_i`` over the set S, ``out_w[q] = Σ w_i`` and
     ``out_n[q] = |S|``.  A query with ``out_n[q] == 0`` is not covered.  A record
     farther than a R_i is rejected before Eq. 5 is evaluated (its ε_i ≥ |P − P_i|/R_i
@@ -170,9 +173,22 @@ def lookup(qP, qN, packed, E, node_start, node_count, node_child, node_box, accu
                     if err < accuracy and front >= -FRONT_TOLERANCE * packed[j, 6]:
                         w = 1.0 / max(err, MIN_ERROR)
                         sw += w
-                        s0 += w * E[j, 0]
-                        s1 += w * E[j, 1]
-                        s2 += w * E[j, 2]
+                        e0 = E[j, 0]
+                        e1 = E[j, 1]
+                        e2 = E[j, 2]
+                        if gradients:
+                            cx = packed[j, 4] * nz - packed[j, 5] * ny      # N_i × N
+                            cy = packed[j, 5] * nx - packed[j, 3] * nz
+                            cz = packed[j, 3] * ny - packed[j, 4] * nx
+                            e0 = max(0.0, e0 + Gr[j, 0, 0] * cx + Gr[j, 0, 1] * cy + Gr[j, 0, 2] * cz
+                                     + Gt[j, 0, 0] * dx + Gt[j, 0, 1] * dy + Gt[j, 0, 2] * dz)
+                            e1 = max(0.0, e1 + Gr[j, 1, 0] * cx + Gr[j, 1, 1] * cy + Gr[j, 1, 2] * cz
+                                     + Gt[j, 1, 0] * dx + Gt[j, 1, 1] * dy + Gt[j, 1, 2] * dz)
+                            e2 = max(0.0, e2 + Gr[j, 2, 0] * cx + Gr[j, 2, 1] * cy + Gr[j, 2, 2] * cz
+                                     + Gt[j, 2, 0] * dx + Gt[j, 2, 1] * dy + Gt[j, 2, 2] * dz)
+                        s0 += w * e0
+                        s1 += w * e1
+                        s2 += w * e2
                         count += 1
                 for c in range(8):
                     child = node_child[node, c]

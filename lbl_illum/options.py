@@ -17,6 +17,9 @@ option                 default  meaning
 ``bounce_scaling``     true     §3.4: each deeper level multiplies ``a`` by 1.4 and halves
                                 the samples
 ``seed``               0        seed of every random number; same seed, same result
+``interpolation``      gradients  ``paper``: Eq. 5 as published; ``gradients``: each record
+                                extrapolated by its rotational and translational gradients
+                                (Ward & Heckbert 1992) before the Eq. 5 average
 =====================  =======  ============================================================
 
 ``auto`` spacings are derived from the extent of what is computed (the sensor
@@ -38,6 +41,8 @@ __all__ = ["Options", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEE
 BOUNCE_ACCURACY_FACTOR = 1.4
 #: §3.4: factor on the sample count per deeper diffuse level.
 BOUNCE_SAMPLE_FACTOR = 0.5
+#: Interpolation rules: the paper's Eq. 5, or Eq. 5 over gradient-extrapolated values.
+INTERPOLATIONS = ("paper", "gradients")
 #: Floor on the samples of a deeper-level primary evaluation (never above the first level's).
 MIN_DEEP_SAMPLES = 16
 
@@ -54,6 +59,7 @@ class Options:
     max_spacing: float | None = None
     bounce_scaling: bool = True
     seed: int = 0
+    interpolation: str = "gradients"
 
     def __post_init__(self):
         self.validate("options")
@@ -88,6 +94,8 @@ class Options:
         if (self.min_spacing is not None and self.max_spacing is not None
                 and self.min_spacing > self.max_spacing):
             bad("min_spacing", f"({self.min_spacing:g}) must not exceed max_spacing ({self.max_spacing:g})")
+        if self.interpolation not in INTERPOLATIONS:
+            bad("interpolation", f"must be one of {', '.join(INTERPOLATIONS)}, got {self.interpolation!r}")
         if not isinstance(self.bounce_scaling, bool):
             bad("bounce_scaling", f"must be true or false, got {self.bounce_scaling!r}")
 
