@@ -117,6 +117,7 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
     v = -np.sin(phi)[..., None] * t[:, None, None, :] + np.cos(phi)[..., None] * b[:, None, None, :]
     rot = np.pi / (m * n) * np.einsum("rjk,rjkc,rjkx->rcx", sin / cos, radiance, v)
 
+    distances = np.asarray(distances, np.float64)
     inv = np.where(np.isfinite(distances), 1.0 / np.maximum(distances, 1e-300), 0.0)
     trans = np.zeros((r, 3, 3))
     if m > 1:   # differences across θ boundaries, along the stratum's centre direction

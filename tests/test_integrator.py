@@ -128,3 +128,11 @@ def test_records_and_results_do_not_depend_on_the_order_of_the_points():
     b = compute_illuminance(scene, points[perm], normals[perm], opts)
     assert a.stats.records == b.stats.records
     assert np.allclose(b.illuminance, a.illuminance[perm], rtol=1e-9)
+
+
+def test_bounce_scaling_of_accuracy_is_capped_at_twice_the_first_level():
+    opts = Options(accuracy=0.1)
+    a = [opts.level_accuracy(k) for k in range(12)]
+    assert a[0] == 0.1 and a[1] == pytest.approx(0.14) and a[2] == pytest.approx(0.196)
+    assert max(a) == pytest.approx(0.2) and a[-1] == pytest.approx(0.2)
+    assert Options(accuracy=0.1, bounce_scaling=False).level_accuracy(7) == 0.1
