@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["orthonormal_basis", "cell_counts", "stratified_directions", "cosine_directions",
-           "irradiance_gradients"]
+           "irradiance_gradients", "limit_gradients"]
 
 
 def orthonormal_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -73,6 +73,30 @@ def cosine_directions(normals: np.ndarray, rng: np.random.Generator) -> np.ndarr
     return stratified_directions(normals, 1, 1, rng)[:, 0, :]
 
 
+#: Hit distances below this [m] count as this in the gradients' 1/r (a ray leaving a
+#: corner may hit the adjacent surface at t ≈ 0).
+MIN_GRADIENT_DISTANCE = 1e-9
+
+
+def limit_gradients(E: np.ndarray, rotational: np.ndarray, translational: np.ndarray,
+                    domain: np.ndarray, accuracy: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gradients no record can use to change its value by more than 100 % inside its
+    valid domain: |∇_t E|·a R_i ≤ E and |∇_r E|·a ≤ E per channel (a R_i = ``domain``,
+    the largest |P − P_i| and, roughly, the largest rotation Eq. 5 admits).  Non-finite
+    gradients become 0.
+
+    E : (r, 3); rotational, translational : (r, 3, 3); domain : (r,) [m].
+    """
+    rot = np.where(np.isfinite(rotational), rotational, 0.0)
+    trans = np.where(np.isfinite(translational), translational, 0.0)
+    E = np.maximum(np.asarray(E, np.float64), 0.0)
+    for g, reach in ((trans, domain[:, None]), (rot, np.full((len(E), 1), accuracy))):
+        size = np.linalg.norm(g, axis=2) * reach
+        scale = np.where(size > E, E / np.maximum(size, 1e-300), 1.0)
+        g *= scale[:, :, None]
+    return rot, trans
+
+
 def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: np.ndarray,
                          distances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotational and translational irradiance gradients from one Eq. 2 sample set.
@@ -118,7 +142,7 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
     rot = np.pi / (m * n) * np.einsum("rjk,rjkc,rjkx->rcx", sin / cos, radiance, v)
 
     distances = np.asarray(distances, np.float64)
-    inv = np.where(np.isfinite(distances), 1.0 / np.maximum(distances, 1e-300), 0.0)
+    inv = np.where(np.isfinite(distances), 1.0 / np.maximum(distances, MIN_GRADIENT_DISTANCE), 0.0)
     trans = np.zeros((r, 3, 3))
     if m > 1:   # differences across θ boundaries, along the stratum's centre direction
         j = np.arange(1, m)

@@ -52,7 +52,7 @@ import numpy as np
 
 from .cache import IrradianceCache, LevelRecords
 from .direct import DirectLight
-from .hemisphere import cell_counts, cosine_directions, irradiance_gradients, stratified_directions
+from .hemisphere import cell_counts, cosine_directions, irradiance_gradients, limit_gradients, stratified_directions
 from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
 from .options import Options
 from .placement import distance_bands, pick_per_cell
@@ -549,9 +549,11 @@ class Integrator:
         if ray_L is not None:
             m, n = pending.cells
             r = len(records)
-            lv.Gr[records], lv.Gt[records] = irradiance_gradients(
+            rot, trans = irradiance_gradients(
                 lv.N[records].astype(np.float64), pending.cat("ray_dir").reshape(r, m, n, 3).astype(np.float64),
                 ray_L.reshape(r, m, n, 3), pending.cat("ray_t", width=0, dtype=np.float32).reshape(r, m, n))
+            lv.Gr[records], lv.Gt[records] = limit_gradients(
+                lv.E[records], rot, trans, lv.accuracy * lv.R[records].astype(np.float64), lv.accuracy)
 
     # -- the whole calculation -----------------------------------------------------------
     def compute(self, points, normals) -> IlluminanceResult:

@@ -107,3 +107,20 @@ def test_gradient_interpolation_is_exact_on_the_record_and_paper_mode_ignores_gr
     E_paper, _, _ = lv.lookup(q, n, gradients=False)
     assert np.allclose(E_grad[:, 0], [500.0, 520.0])
     assert np.allclose(E_paper[:, 0], [500.0, 500.0])
+
+
+def test_gradients_stay_finite_and_limited_for_rays_hitting_at_zero_distance():
+    from lbl_illum.hemisphere import irradiance_gradients, limit_gradients
+
+    rng = np.random.default_rng(4)
+    normals = np.array([[0.0, 0.0, 1.0]])
+    d = stratified_directions(normals, 6, 19, rng).reshape(1, 6, 19, 3)
+    L = rng.uniform(0, 1000, (1, 6, 19, 3))
+    t = rng.uniform(0.5, 3.0, (1, 6, 19))
+    t[0, 2, 3] = 0.0                                   # a ray from a corner, hit at t = 0
+    rot, trans = irradiance_gradients(normals, d, L, t)
+    E = np.full((1, 3), 500.0)
+    rot, trans = limit_gradients(E, rot, trans, np.array([0.05]), 0.1)
+    assert np.all(np.isfinite(rot)) and np.all(np.isfinite(trans))
+    assert np.all(np.linalg.norm(trans, axis=2) * 0.05 <= 500.0 * (1 + 1e-12))
+    assert np.all(np.linalg.norm(rot, axis=2) * 0.1 <= 500.0 * (1 + 1e-12))
