@@ -83,7 +83,7 @@ def _build_parser() -> argparse.ArgumentParser:
                    help=".csv (x,y,z,nx,ny,nz,illuminance,direct,indirect) or .txt (one value per line)")
     q = p.add_argument_group("quality")
     q.add_argument("--accuracy", type=_number, metavar="A", help="the paper's a (default 0.1; 0 = no interpolation)")
-    q.add_argument("--bounces", type=_positive_int, metavar="N", help="diffuse reflections followed (default 5)")
+    q.add_argument("--bounces", type=_positive_int, metavar="N", help="diffuse reflections followed (default 8)")
     q.add_argument("--samples", type=_positive_int, metavar="N",
                    help="hemisphere samples of a first-level primary evaluation (default 1024)")
     q.add_argument("--ambient", type=_number, metavar="E", help="illuminance [lux] at the bounce limit (default 0)")

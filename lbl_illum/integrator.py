@@ -34,7 +34,9 @@ So results do not depend on the order of the queries, and a rerun from a saved c
 is identical.  Python loops only over levels and passes; rays, records and queries are
 arrays.
 
-**Record spacing.**  R_i is clamped to [min_spacing, max_spacing + δ(P_i)], δ being
+**Record radius.**  R_i is the harmonic mean distance of Eq. 4, limited by
+E/|∇_t E| of the light known when the record's rays are traced (sky and ground seen
+directly or through windows; see :meth:`Integrator._known_gradient_limit`), then clamped to [min_spacing, max_spacing + δ(P_i)], δ being
 the distance from P_i to the box around the query points: far from every query, a
 record is seen under a small solid angle and may grow in proportion (a level-of-detail
 rule of this project; it keeps a kilometre-wide ground from costing records, where a
@@ -179,6 +181,8 @@ class Integrator:
         self.direct = DirectLight(self.tracer, self.materials, scene.sun)
         self.sky = scene.sky
         self.sun = self.direct.sun
+        #: limit each R_i by E/|∇_t E| of its known light (off only for comparisons)
+        self.gradient_limit = True
         portal_ids = np.flatnonzero(self.materials.portal[scene.triangles.material])
         self.portals = TriangleSampler(scene.triangles, portal_ids) if len(portal_ids) else None
         self._portal_index = np.full(len(scene.triangles), -1, np.int64)
@@ -391,7 +395,26 @@ class Integrator:
         pending.samples.append(np.full(r, S))
         inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
         with np.errstate(divide="ignore"):
-            return np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
+            R0 = np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
+        if self.cache.levels[k].accuracy > 0 and self.gradient_limit:
+            R0 = np.minimum(R0, self._known_gradient_limit(Ns, dirs, radiance, first_t, m, n))
+        return R0
+
+    def _known_gradient_limit(self, normals, dirs, radiance, first_t, m, n):
+        """R_i ≤ E / |∇_t E| (Ward & Heckbert 1992, §3) for the part of each record's
+        value known when its rays are traced: sky, ground glow and light seen by
+        reflection, through windows included.  That part is what makes daylit rooms
+        non-uniform (the split sphere of Eq. 3 assumes uniform light), and it is known
+        before the levels below are evaluated.  Records with no known light: no limit.
+        """
+        r = len(normals)
+        Y = luminance(radiance).reshape(r, m, n)
+        rgb = np.repeat(Y[..., None], 3, axis=-1)
+        _, trans = irradiance_gradients(normals, dirs.reshape(r, m, n, 3), rgb, first_t.reshape(r, m, n))
+        E = np.pi / (m * n) * Y.sum(axis=(1, 2))
+        g = np.linalg.norm(trans[:, 0, :], axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where((g > 0) & (E > 0), E / g, np.inf)
 
     def _portal_density(self, directions, t, prim):
         """Solid-angle density [1/sr] of drawing ``directions`` by portal sampling, for

@@ -6,7 +6,7 @@ option                 default  meaning
 ``accuracy``           0.1      the paper's ``a`` (Eq. 5): a record serves queries whose
                                 error estimate is below ``a``.  0 disables interpolation
                                 (every query is a primary evaluation: pure Monte Carlo)
-``bounces``            5        diffuse reflections followed; 0 = light straight from its
+``bounces``            8        diffuse reflections followed; 0 = light straight from its
                                 source (sun, light surfaces, sky and ground seen directly or
                                 through glass).  Radiance's ``-ab`` is ``bounces + 1``
 ``samples``            1024     hemisphere samples M·N of a primary evaluation (Eq. 2) at the
@@ -57,7 +57,7 @@ class Options:
     """Quality options of an illuminance calculation (see the module table)."""
 
     accuracy: float = 0.1
-    bounces: int = 5
+    bounces: int = 8
     samples: int = 1024
     ambient: float = 0.0
     min_spacing: float | None = None

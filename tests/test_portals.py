@@ -82,3 +82,24 @@ def test_portal_key_must_be_boolean():
 
     with pytest.raises(InputError, match="portal"):
         material_from_table("g", {"type": "glass", "transmittance": 0.5, "portal": "yes"}, "s.toml: [materials.g]")
+
+
+def test_known_light_gradient_limits_record_radius_near_a_window():
+    """Under the roof light the floor's sky component falls off fast; the split sphere
+    (R_0 from distances only) does not see it, the E/|∇E| limit of the known light does."""
+    from lbl_illum.integrator import Integrator
+
+    scene = roof_light_room(True)
+    pts = np.array([[0.8, 0.0, 2.0]])                  # 1 m below the roof, beside the opening
+    radii = {}
+    for limit in (False, True):
+        integ = Integrator(scene, Options(accuracy=0.1, samples=1024, bounces=0))
+        integ.gradient_limit = limit
+        integ.compute(pts, UP[:1])
+        radii[limit] = float(integ.cache.levels[0].R[0])
+    assert radii[True] < 0.7 * radii[False], radii
+    # the limit: E / |dE/dx| of the integral over the opening, by central differences
+    h = 0.01
+    E = sky_through_opening(np.array([[0.8, 0, 2], [0.8 + h, 0, 2], [0.8 - h, 0, 2]]))
+    expected = E[0] / abs((E[1] - E[2]) / (2 * h))         # 0.618 m; split sphere alone: 1.39 m
+    assert radii[True] == pytest.approx(expected, rel=0.1)
