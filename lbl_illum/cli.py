@@ -86,6 +86,9 @@ def _build_parser() -> argparse.ArgumentParser:
     q.add_argument("--bounces", type=_positive_int, metavar="N", help="diffuse reflections followed (default 8)")
     q.add_argument("--samples", type=_positive_int, metavar="N",
                    help="hemisphere samples of a first-level primary evaluation (default 1024)")
+    q.add_argument("--point-samples", type=_positive_int, metavar="N",
+                   help="evaluate every point on its own with N hemisphere samples; the cache starts at the "
+                        "first reflection (for sparse sensor grids)")
     q.add_argument("--ambient", type=_number, metavar="E", help="illuminance [lux] at the bounce limit (default 0)")
     q.add_argument("--min-spacing", type=_number, metavar="D", help="lower clamp on record R_i [scene units]")
     q.add_argument("--max-spacing", type=_number, metavar="D", help="upper clamp on record R_i [scene units]")
@@ -119,7 +122,7 @@ def _run_illuminance(args) -> int:
     options = scene.options.replace(
         accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
         min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
-        interpolation=args.interpolation,
+        interpolation=args.interpolation, point_samples=args.point_samples,
         bounce_scaling=False if args.no_bounce_scaling else None)
     points, normals = read_points(args.points, scene.unit_scale)
     if not args.quiet:

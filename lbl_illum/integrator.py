@@ -130,7 +130,8 @@ def scene_fingerprint(scene: Scene, options: Options) -> str:
                 scene.sky.ground_luminance),
         "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,
                                                scene.sun.direct_normal_illuminance),
-        "options": (options.accuracy, options.bounces, options.samples, options.ambient, options.bounce_scaling),
+        "options": (options.ambient, [options.level_accuracy(k) for k in range(options.bounces + 1)],
+                    [options.level_samples(k) for k in range(options.bounces + 1)]),
     }
     h.update(json.dumps(desc, sort_keys=True).encode())
     return h.hexdigest()

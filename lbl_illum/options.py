@@ -17,6 +17,11 @@ option                 default  meaning
 ``bounce_scaling``     true     §3.4: each deeper level multiplies ``a`` by 1.4 (up to twice
                                 the first level's) and halves the samples
 ``seed``               0        seed of every random number; same seed, same result
+``point_samples``      none     when set, every query point gets its own primary evaluation with
+                                this many samples (no interpolation among the points), and the
+                                cache — ``accuracy``, ``samples`` and §3.4's series — starts at
+                                the first reflection.  On sparse sensor grids interpolating
+                                among the points buys little
 ``interpolation``      gradients  ``paper``: Eq. 5 as published; ``gradients``: each record
                                 extrapolated by its rotational and translational gradients
                                 (Ward & Heckbert 1992) before the Eq. 5 average
@@ -65,6 +70,7 @@ class Options:
     bounce_scaling: bool = True
     seed: int = 0
     interpolation: str = "gradients"
+    point_samples: int | None = None
 
     def __post_init__(self):
         self.validate("options")
@@ -82,6 +88,9 @@ class Options:
                 bad(key, f"must be a finite number, got {value!r}")
             if value < 0:
                 bad(key, f"must be >= 0, got {value!r}")
+        if self.point_samples is not None and (isinstance(self.point_samples, bool)
+                                               or not isinstance(self.point_samples, int) or self.point_samples < 1):
+            bad("point_samples", f"must be a whole number >= 1, got {self.point_samples!r}")
         for key in ("bounces", "samples", "seed"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int):
@@ -130,11 +139,18 @@ class Options:
         return dataclasses.replace(self, **{k: v for k, v in changes.items() if v is not None})
 
     # -- §3.4 per-level parameters -----------------------------------------
+    def _cache_level(self, level: int) -> int:
+        """Position of ``level`` in §3.4's series (it starts one level later with
+        ``point_samples``)."""
+        return level - 1 if self.point_samples is not None else level
+
     def level_accuracy(self, level: int) -> float:
         """``a`` at diffuse level ``level`` (0 = the queries themselves)."""
+        if self.point_samples is not None and level == 0:
+            return 0.0
         if not self.bounce_scaling:
             return self.accuracy
-        return self.accuracy * min(BOUNCE_ACCURACY_FACTOR ** level, BOUNCE_ACCURACY_CAP)
+        return self.accuracy * min(BOUNCE_ACCURACY_FACTOR ** self._cache_level(level), BOUNCE_ACCURACY_CAP)
 
     def level_samples(self, level: int) -> int:
         """Samples of a primary evaluation at diffuse ``level``.
@@ -142,6 +158,9 @@ class Options:
         With accuracy 0 (pure Monte Carlo) the deeper levels follow one path ray per
         hit, so the cost stays samples · (bounces + 1) rays per query.
         """
+        if self.point_samples is not None and level == 0:
+            return self.point_samples
+        level = self._cache_level(level)
         if level == 0:
             return self.samples
         if self.accuracy == 0.0:

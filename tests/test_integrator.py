@@ -136,3 +136,17 @@ def test_bounce_scaling_of_accuracy_is_capped_at_twice_the_first_level():
     assert a[0] == 0.1 and a[1] == pytest.approx(0.14) and a[2] == pytest.approx(0.196)
     assert max(a) == pytest.approx(0.2) and a[-1] == pytest.approx(0.2)
     assert Options(accuracy=0.1, bounce_scaling=False).level_accuracy(7) == 0.1
+
+
+def test_point_samples_evaluate_every_point_and_start_the_cache_one_level_down():
+    opts = Options(accuracy=0.1, samples=512, point_samples=4096)
+    assert opts.level_accuracy(0) == 0.0 and opts.level_samples(0) == 4096
+    assert opts.level_accuracy(1) == 0.1 and opts.level_samples(1) == 512
+    assert opts.level_accuracy(2) == pytest.approx(0.14) and opts.level_samples(2) == 256
+    scene = closed_box(0.5)
+    pts = np.array([[0.0, 0.0, 1.0], [0.01, 0.0, 1.0]])       # close enough to share a record
+    nrm = np.array([[0, 0, 1.0], [0, 0, 1.0]])
+    shared = compute_illuminance(scene, pts, nrm, Options(bounces=2, samples=256))
+    own = compute_illuminance(scene, pts, nrm, Options(bounces=2, samples=256, point_samples=256))
+    assert shared.stats.new_records[0] == 1 and own.stats.new_records[0] == 2
+    assert np.all(np.isfinite(own.illuminance)) and np.all(own.indirect > 0)

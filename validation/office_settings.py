@@ -23,14 +23,18 @@ sys.path.insert(0, str(ROOT))
 from lbl_illum import Options, compute_illuminance, load_scene, read_points  # noqa: E402
 
 SETTINGS = [
-    ("default (a 0.1, 1024 samples, 5 bounces)", {}),
+    ("default (a 0.1, 1024 samples, 8 bounces)", {}),
+    ("--accuracy 0.15", {"accuracy": 0.15}),
     ("--accuracy 0.2", {"accuracy": 0.2}),
-    ("--accuracy 0.05", {"accuracy": 0.05}),
-    ("--samples 4096", {"samples": 4096}),
+    ("--bounces 5", {"bounces": 5}),
     ("--bounces 2", {"bounces": 2}),
-    ("--bounces 8", {"bounces": 8}),
     ("--interpolation paper", {"interpolation": "paper"}),
+    ("--point-samples 4096 --accuracy 0.14 --samples 256", {"point_samples": 4096, "accuracy": 0.14,
+                                                          "samples": 256}),
+    ("--point-samples 4096 --accuracy 0.2 --samples 256", {"point_samples": 4096, "accuracy": 0.2,
+                                                         "samples": 256}),
     ("--accuracy 0 --samples 4096 (pure Monte Carlo)", {"accuracy": 0.0, "samples": 4096}),
+    ("--accuracy 0 --samples 16384 (pure Monte Carlo)", {"accuracy": 0.0, "samples": 16384}),
 ]
 
 
