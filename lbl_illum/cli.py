@@ -15,6 +15,7 @@ from pathlib import Path
 
 from . import __version__
 from .errors import InputError
+from .options import PRESETS, preset_table
 
 __all__ = ["main"]
 
@@ -76,12 +77,14 @@ def _build_parser() -> argparse.ArgumentParser:
                        description="Compute the illuminance [lux] at the sensor points of a .pts file "
                        "(x y z nx ny nz per line, scene units): direct light plus diffuse "
                        "interreflection through the irradiance cache.",
-                       epilog=QUALITY_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=QUALITY_HELP + preset_table(), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts)")
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    help=".csv (x,y,z,nx,ny,nz,illuminance,direct,indirect) or .txt (one value per line)")
     q = p.add_argument_group("quality")
+    q.add_argument("--preset", choices=tuple(PRESETS), metavar="NAME",
+                   help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it)")
     q.add_argument("--accuracy", type=_number, metavar="A", help="the paper's a (default 0.1; 0 = no interpolation)")
     q.add_argument("--bounces", type=_positive_int, metavar="N", help="diffuse reflections followed (default 8)")
     q.add_argument("--samples", type=_positive_int, metavar="N",
@@ -102,7 +105,29 @@ def _build_parser() -> argparse.ArgumentParser:
     r.add_argument("--cache", metavar="FILE", help="read records from FILE if it exists; write all records back")
     r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+
+    from .studies import STUDIES
+
+    v = sub.add_parser("validate", help="run a validation study and write its report",
+                       description="Run a validation study against analytic or converged reference values "
+                       "and write DIR/NAME/report.md, report.html, PNG plots and results.json (every number "
+                       "in the report).", epilog=_STUDY_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    v.add_argument("study", choices=[*STUDIES, "all"], metavar="NAME", help="a study, or all")
+    v.add_argument("--report", default="docs/validation", metavar="DIR",
+                   help="folder of the reports (default docs/validation)")
+    v.add_argument("--quick", action="store_true", help="the reduced version (seconds, as the test suite runs it)")
+    v.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     return parser
+
+
+_STUDY_HELP = """\
+studies:
+  sphere-plane        the paper's §4: sphere on a plane against a closed form; Radiance side by side
+  integrating-sphere  closed-form interreflection to many bounces, reflectance up to 0.99
+  office-tradeoff     seconds against error on examples/office; the --preset ladder
+  extremes            every knob at its extremes: finite, plausible, checked values
+  scene-requires      records and rays go only where the queries need them
+"""
 
 
 def _run_illuminance(args) -> int:
@@ -119,7 +144,8 @@ def _run_illuminance(args) -> int:
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
     scene = load_scene(args.scene)
-    options = scene.options.replace(
+    options = scene.options.with_preset(args.preset) if args.preset else scene.options
+    options = options.replace(
         accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
         min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
         interpolation=args.interpolation, point_samples=args.point_samples,
@@ -168,6 +194,41 @@ def _run_illuminance(args) -> int:
     return 0
 
 
+def _run_validate(args) -> int:
+    from tqdm import tqdm
+
+    from .studies import STUDIES, StudyContext, run_study
+
+    names = list(STUDIES) if args.study == "all" else [args.study]
+    report_dir = Path(args.report)
+    if report_dir.exists() and not report_dir.is_dir():
+        raise InputError(f"{args.report}: not a folder")
+    for name in names:
+        t0 = time.perf_counter()
+        bar = tqdm(total=None, unit="run", delay=1.0, file=sys.stderr, disable=True if args.quiet else None,
+                   leave=False, dynamic_ncols=True, desc=name)
+        ctx = StudyContext(quick=args.quick)
+
+        def plan(total, bar=bar):
+            bar.total = total
+            bar.refresh()
+
+        def step(label, bar=bar):
+            bar.set_postfix_str(label, refresh=False)
+            bar.update(1)
+
+        ctx.on_plan, ctx.progress = plan, step
+        try:
+            folder = run_study(name, ctx, report_dir, command_dir=args.report)
+        finally:
+            bar.close()
+        if not args.quiet:
+            print(f"lbl-illum: validate {name}{' (quick)' if args.quick else ''}: {ctx.runs} runs, "
+                  f"{ctx.records:,} records, {ctx.rays:,} rays in {time.perf_counter() - t0:.1f} s "
+                  f"-> {folder / 'report.md'}", file=sys.stderr)
+    return 0
+
+
 def main(argv=None) -> int:
     parser = _build_parser()
     try:
@@ -177,6 +238,8 @@ def main(argv=None) -> int:
             return 2
         if args.command == "illuminance":
             return _run_illuminance(args)
+        if args.command == "validate":
+            return _run_validate(args)
         raise InputError(f"lbl-illum: unknown command {args.command!r}")
     except InputError as exc:
         print(f"lbl-illum: error: {exc}", file=sys.stderr)

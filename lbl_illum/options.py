@@ -27,6 +27,12 @@ option                 default  meaning
                                 (Ward & Heckbert 1992) before the Eq. 5 average
 =====================  =======  ============================================================
 
+**Presets** (``--preset`` on the command line, ``preset = "..."`` under ``[settings]``)
+name a point on the measured speed–accuracy front of the office example
+(``lbl-illum validate office-tradeoff``; see :data:`PRESETS`).  A preset sets
+``accuracy``, ``samples``, ``bounces`` and ``point_samples``; options given
+explicitly win over it.
+
 ``auto`` spacings are derived from the extent of what is computed (the sensor
 points), never from the scene's bounding box: see :func:`lbl_illum.integrator.default_spacing`.
 """
@@ -40,7 +46,7 @@ from typing import Any, Mapping
 
 from .errors import InputError, check_keys
 
-__all__ = ["Options", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
+__all__ = ["Options", "PRESETS", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
 
 #: §3.4: factor on ``a`` per deeper diffuse level ...
 BOUNCE_ACCURACY_FACTOR = 1.4
@@ -55,6 +61,36 @@ BOUNCE_SAMPLE_FACTOR = 0.5
 INTERPOLATIONS = ("paper", "gradients")
 #: Floor on the samples of a deeper-level primary evaluation (never above the first level's).
 MIN_DEEP_SAMPLES = 16
+
+#: Quality presets, chosen from the Pareto front of seconds against error that the
+#: ``office-tradeoff`` study measures (docs/validation/office-tradeoff/report.md).
+#: Each sets exactly these four options.
+PRESETS: dict[str, dict[str, Any]] = {
+    "draft": {"accuracy": 0.3, "samples": 256, "bounces": 3, "point_samples": None},
+    "low": {"accuracy": 0.2, "samples": 512, "bounces": 5, "point_samples": None},
+    "medium": {"accuracy": 0.1, "samples": 1024, "bounces": 8, "point_samples": None},
+    "high": {"accuracy": 0.07, "samples": 2048, "bounces": 10, "point_samples": None},
+    "max": {"accuracy": 0.05, "samples": 4096, "bounces": 12, "point_samples": None},
+}
+
+#: What each preset measured on examples/office (77 sensors, CIE overcast sky, 2 cores)
+#: against the converged reference: (seconds, mean relative error, max relative error).
+#: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
+PRESET_MEASURED: dict[str, tuple[float, float, float]] = {}
+
+
+def preset_table() -> str:
+    """The presets and what they measured, as the command line's help prints them."""
+    lines = ["", "presets (accuracy / samples / bounces; measured on examples/office, 77 sensors, 2 cores):"]
+    for name, p in PRESETS.items():
+        text = f"  {name:7s} a {p['accuracy']:g} / {p['samples']} / {p['bounces']}"
+        if p["point_samples"]:
+            text += f", point samples {p['point_samples']}"
+        if name in PRESET_MEASURED:
+            sec, mean, worst = PRESET_MEASURED[name]
+            text += f": {100 * mean:.1f} % mean, {100 * worst:.1f} % max error, {sec:.1f} s"
+        lines.append(text)
+    return "\n".join(lines) + "\n"
 
 
 @dataclass(frozen=True)
@@ -120,12 +156,15 @@ class Options:
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any] | None, where: str, base: "Options | None" = None) -> "Options":
-        """Options from a ``[settings]`` table, on top of ``base`` (default: the defaults)."""
+        """Options from a ``[settings]`` table, on top of ``base`` (default: the
+        defaults).  A ``preset`` key applies first; the other keys win over it."""
         base = base or cls()
         if not table:
             return base
-        check_keys(table, cls.field_names(), where)
+        check_keys(table, (*cls.field_names(), "preset"), where)
         values = dict(table)
+        if "preset" in values:
+            base = base.with_preset(values.pop("preset"), where)
         for key in ("accuracy", "ambient", "min_spacing", "max_spacing"):
             if isinstance(values.get(key), int) and not isinstance(values.get(key), bool):
                 values[key] = float(values[key])
@@ -133,6 +172,12 @@ class Options:
             return dataclasses.replace(base, **values)
         except InputError as exc:
             raise InputError(str(exc).replace("options:", f"{where}:", 1)) from None
+
+    def with_preset(self, name: Any, where: str = "options") -> "Options":
+        """A copy with the quality options of preset ``name`` (see :data:`PRESETS`)."""
+        if name not in PRESETS:
+            raise InputError(f"{where}: 'preset' must be one of {', '.join(PRESETS)}, got {name!r}")
+        return dataclasses.replace(self, **PRESETS[name])
 
     def replace(self, **changes) -> "Options":
         """A copy with ``changes`` (``None`` values are ignored)."""

@@ -151,3 +151,33 @@ def test_cache_in_missing_folder_is_refused_before_any_output(sphere_job, capsys
                         "--cache", tmp / "nowhere" / "c.lblcache"] + FAST, capsys)
     assert code == 2 and "does not exist" in err and len(err.strip().splitlines()) == 1
     assert not (tmp / "r.csv").exists()
+
+
+def test_preset_and_explicit_option(sphere_job, capsys):
+    tmp, pts = sphere_job
+    args = ["illuminance", SPHERE / "scene.toml", "--points", pts, "-o", tmp / "r.csv", "--preset", "draft",
+            "--bounces", "1", "--samples", "32", "--stats", tmp / "s.json"]
+    assert run(args, capsys)[0] == 0
+    settings = json.loads((tmp / "s.json").read_text())["settings"]
+    assert settings["accuracy"] == 0.3 and settings["samples"] == 32 and settings["bounces"] == 1
+
+
+def test_unknown_preset_and_study_one_line(sphere_job, capsys):
+    tmp, pts = sphere_job
+    code, _, err = run(["illuminance", SPHERE / "scene.toml", "--points", pts, "-o", tmp / "r.csv",
+                        "--preset", "ultra"], capsys)
+    assert code == 2 and "invalid choice: 'ultra'" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp / "r.csv").exists()
+    code, _, err = run(["validate", "nonsense", "--report", tmp], capsys)
+    assert code == 2 and "invalid choice: 'nonsense'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_help_lists_presets_and_studies(capsys):
+    with pytest.raises(SystemExit):
+        main(["illuminance", "--help"])
+    out = capsys.readouterr().out
+    assert "presets (accuracy / samples / bounces" in out and "medium" in out
+    with pytest.raises(SystemExit):
+        main(["validate", "--help"])
+    out = capsys.readouterr().out
+    assert "sphere-plane" in out and "--quick" in out
