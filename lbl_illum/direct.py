@@ -2,7 +2,9 @@
 
 * Sun (DESIGN.md §2): E = E_dn · max(0, N·s) · V, s the disk's centre and V the mean
   transmittance of shadow rays sampled uniformly over the 6.8e-5 sr disk (0 behind an
-  opaque surface, τ behind each pane of glass).
+  opaque surface, τ behind each pane of glass).  When the disk straddles the surface's
+  horizon (|N·s| < sin δ, δ = 0.27° the disk's radius) each ray carries its own
+  max(0, N·d): E = E_dn · mean(max(0, N·d) T(d)), the part below the horizon adding nothing.
 * Light surfaces (Lambertian emitters, two-sided): area sampling,
   E = (1/n) Σ L cos θ_r cos θ_l / d² / p_A, with triangles chosen in proportion to
   area × luminance and points uniform on them (Pharr, Jakob & Humphreys,
@@ -19,7 +21,11 @@ import numpy as np
 from .geometry import TriangleSampler
 from .materials import LIGHT, MaterialTable
 from .raycast import Tracer
-from .sun import Sun
+from .sun import SUN_COS_HALF_ANGLE, Sun
+
+#: sin δ of the sun disk's angular radius δ: the disk straddles the horizon of a surface
+#: whose N·s lies within ± this.
+SUN_SIN_HALF_ANGLE = float(np.sqrt(1.0 - SUN_COS_HALF_ANGLE ** 2))
 
 __all__ = ["DirectLight"]
 
@@ -47,25 +53,37 @@ class DirectLight:
         return self.sun is None and not self.has_lights
 
     def illuminance(self, points, shading_normals, geometric_normals, rng: np.random.Generator,
-                    light_samples: int = 1) -> np.ndarray:
-        """(n, 3) direct illuminance [lux] at points with the given facing normals."""
+                    light_samples: int = 1, origins=None) -> np.ndarray:
+        """(n, 3) direct illuminance [lux] at points with the given facing normals.
+
+        ``origins`` (n, 3): where the shadow rays start (default: the points offset
+        along ``geometric_normals``, :meth:`Tracer.offset`).
+        """
         points = np.asarray(points, np.float64)
         n = len(points)
         E = np.zeros((n, 3))
         if n == 0 or self.is_dark:
             return E
-        origins = self.tracer.offset(points, geometric_normals)
+        if origins is None:
+            origins = self.tracer.offset(points, geometric_normals)
         if self.sun is not None:
-            # cosine at the disk's centre (its mean over the disk differs by < 1e-5);
-            # the jittered rays decide only visibility, so penumbrae are soft
+            # cosine at the disk's centre (its mean over a whole disk differs by < 1e-5);
+            # the jittered rays decide only visibility, so penumbrae are soft.  A disk cut
+            # by the surface's horizon (|N·s| < sin δ: sun within 0.27° of the plane) gets
+            # each ray's own cosine, max(0, N·d): at 0.1° altitude the centre's cosine
+            # was 15 % low on an open horizontal surface
             cos = shading_normals @ self.sun.direction
-            lit = np.flatnonzero(cos > 0.0)
-            if len(lit):
+            for lit, cut in ((np.flatnonzero(cos > 0.0), False),
+                             (np.flatnonzero((cos > -SUN_SIN_HALF_ANGLE) & (cos <= 0.0)), True)):
+                if len(lit) == 0:
+                    continue
+                cut = cut | (cos[lit] < SUN_SIN_HALF_ANGLE)
                 T = np.zeros((len(lit), 3))
                 for _ in range(light_samples):
                     d = self.sun.sample_directions(rng.random(len(lit)), rng.random(len(lit)))
-                    T += self.tracer.transmittance(origins[lit], d)
-                E[lit] += self.sun.direct_normal_illuminance * cos[lit, None] * T / light_samples
+                    w = np.where(cut, np.maximum(np.einsum("ij,ij->i", shading_normals[lit], d), 0.0), 1.0)
+                    T += self.tracer.transmittance(origins[lit], d) * w[:, None]
+                E[lit] += self.sun.direct_normal_illuminance * np.where(cut, 1.0, cos[lit])[:, None] * T / light_samples
         if self.has_lights:
             for _ in range(light_samples):
                 E += self._light_sample(points, origins, shading_normals, rng) / light_samples

@@ -91,7 +91,7 @@ class RunStats:
     new_records: list = field(default_factory=list)      # primary evaluations per level, this run
     queries: list = field(default_factory=list)          # cache queries per level
     cache_hits: int = 0                                  # queries answered by records that existed
-    rays: int = 0
+    rays: int = 0                                        # rays traced by this run
     seconds: float = 0.0
     min_spacing: float = 0.0                             # [m]
     max_spacing: float = 0.0                             # [m]
@@ -349,7 +349,9 @@ class Integrator:
         S = m * n
         r = len(P)
         dirs = stratified_directions(Ns, m, n, rng).reshape(-1, 3)
-        origins = np.repeat(self.tracer.offset(P, Ng), S, axis=0)
+        # level 0 holds the sensor points, which need not lie on a surface
+        base = self.tracer.sensor_origins(P, Ng) if k == 0 else self.tracer.offset(P, Ng)
+        origins = np.repeat(base, S, axis=0)
         n_p = 0
         # portal samples add rays per record; on the one-ray paths of accuracy 0 below
         # the first level they would make every path branch, so those go without
@@ -372,7 +374,7 @@ class Integrator:
             pending.ray_dir.append(dirs.astype(np.float32))
             pending.cells = (m, n)
         if n_p:
-            p_known, p_hits, p_owner = self._portal_samples(P, Ns, Ng, S, n_p, rng)
+            p_known, p_hits, p_owner = self._portal_samples(P, Ns, Ng, S, n_p, rng, base)
             known += p_known
             hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng")}
             hit_weight = np.concatenate([hit_weight, p_hits["weight"]])
@@ -410,12 +412,18 @@ class Integrator:
         """
         r = len(normals)
         Y = luminance(radiance).reshape(r, m, n)
-        rgb = np.repeat(Y[..., None], 3, axis=-1)
-        _, trans = irradiance_gradients(normals, dirs.reshape(r, m, n, 3), rgb, first_t.reshape(r, m, n))
         E = np.pi / (m * n) * Y.sum(axis=(1, 2))
+        limit = np.full(r, np.inf)
+        lit = np.flatnonzero(E > 0)       # the gradients of unlit records are not computed
+        if len(lit) == 0:
+            return limit
+        rgb = np.repeat(Y[lit, ..., None], 3, axis=-1)
+        _, trans = irradiance_gradients(normals[lit], dirs.reshape(r, m, n, 3)[lit], rgb,
+                                        first_t.reshape(r, m, n)[lit])
         g = np.linalg.norm(trans[:, 0, :], axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where((g > 0) & (E > 0), E / g, np.inf)
+            limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
+        return limit
 
     def _portal_density(self, directions, t, prim):
         """Solid-angle density [1/sr] of drawing ``directions`` by portal sampling, for
@@ -430,7 +438,7 @@ class Integrator:
         p_p = n_p * self._portal_density(directions, t, prim)
         return p_h / np.maximum(p_h + p_p, 1e-300)
 
-    def _portal_samples(self, P, Ns, Ng, S, n_p, rng):
+    def _portal_samples(self, P, Ns, Ng, S, n_p, rng, origins=None):
         """Light through the portals seen from (P, Ns): the paper's §5 advice that large
         sources belong in the indirect step, sampled well.
 
@@ -450,7 +458,7 @@ class Integrator:
         r = len(P)
         tri, x, pdf_area, n_p = self.portals.sample_stratified(rng, r, n_p)
         owner = np.repeat(np.arange(r), n_p)
-        o = np.repeat(self.tracer.offset(P, Ng), n_p, axis=0)
+        o = np.repeat(self.tracer.offset(P, Ng) if origins is None else origins, n_p, axis=0)
         w = x - o
         dist = np.linalg.norm(w, axis=1)
         w /= np.maximum(dist, 1e-300)[:, None]
@@ -583,7 +591,7 @@ class Integrator:
     def compute(self, points, normals) -> IlluminanceResult:
         """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``."""
         t0 = time.perf_counter()
-        self._rays_reported = self.tracer.rays_traced
+        self._rays_reported = rays_before = self.tracer.rays_traced
         points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
         normals = np.asarray(normals, np.float64).reshape(-1, 3)
         normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
@@ -591,7 +599,11 @@ class Integrator:
         stats = RunStats(new_records=[0] * (B + 1), queries=[0] * (B + 1))
         if self.cache is None:
             self.cache = self._new_cache(points)
-        auto_min, auto_max = self.default_spacing(points, normals) if len(points) else (1.0, 1.0)
+        # the spacing probe traces rays: skip it when no level can hold light (nothing
+        # indirect is computed) or when both limits are given
+        probe = (len(points) > 0 and self._level_active(0)
+                 and not (self.options.min_spacing and self.options.max_spacing))
+        auto_min, auto_max = self.default_spacing(points, normals) if probe else (1.0, 1.0)
         scale = self.scene.unit_scale
         self.max_spacing = self.options.max_spacing * scale if self.options.max_spacing else auto_max
         self.min_spacing = self.options.min_spacing * scale if self.options.min_spacing else min(
@@ -627,8 +639,9 @@ class Integrator:
 
         # answers at the query points
         self._tick("direct light at the points")
+        origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
         direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
-                                         light_samples=QUERY_LIGHT_SAMPLES)
+                                         light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
         if levels:
             _, own0, _, _ = levels[0]
             indirect = self._answer(0, points, normals, own0)
@@ -636,7 +649,7 @@ class Integrator:
             indirect = np.zeros_like(direct)
         self._tick("done")
         stats.records = self.cache.record_counts
-        stats.rays = self.tracer.rays_traced
+        stats.rays = self.tracer.rays_traced - rays_before
         stats.seconds = time.perf_counter() - t0
         return IlluminanceResult(direct + indirect, direct, indirect, stats)
 

@@ -30,13 +30,17 @@ import numpy as np
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
-from .geometry import Triangles
+from .geometry import SPHERE_MAX_DEVIATION, Triangles
+from .hemisphere import orthonormal_basis
 from .materials import GLASS
 
 __all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count"]
 
 #: Relative offset of ray origins off the surface they leave (see module docstring).
 SELF_HIT_EPSILON = 1e-5
+#: A sensor closer than this fraction of its ε to a surface in front of it lies on that
+#: surface (embree's float32 distances for such a point are a few ulps, ~1e-7 relative).
+ON_SURFACE_FRACTION = 0.05
 #: Glass layers a shadow ray may cross before it is considered blocked.
 MAX_GLASS_LAYERS = 16
 #: Rays per chunk handed to one embree call from one thread.
@@ -217,7 +221,103 @@ class Tracer:
         return p, ng, ns
 
     def offset(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
-        """Ray origins just off the surface at ``points`` on the side of ``normals``."""
+        """Ray origins just off the surface at ``points`` on the side of ``normals``.
+
+        Points on a sphere primitive's true surface that leave towards its inside get
+        ``SPHERE_MAX_DEVIATION`` · radius more: the facets lie up to that far inside the
+        true sphere, so the plain offset would leave the origin between the true sphere
+        and the facets, where every ray and shadow ray hits the sphere's own facet.
+        """
         points = np.asarray(points, dtype=np.float64)
+        normals = np.asarray(normals, dtype=np.float64)
         eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        for c, r in zip(self.triangles.sphere_center, self.triangles.sphere_radius):
+            radial = points - c
+            dist = np.linalg.norm(radial, axis=1)
+            on = np.abs(dist - r) <= 2.0 * SPHERE_MAX_DEVIATION * r + eps
+            inward = np.einsum("ij,ij->i", radial, normals) < 0.0
+            eps = eps + np.where(on & inward, SPHERE_MAX_DEVIATION * r, 0.0)
         return points + eps[:, None] * normals
+
+    def sensor_origins(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        """Ray origins for sensor points: :meth:`offset`, kept clear of the surfaces near them.
+
+        The offset ε·n (ε = ``SELF_HIT_EPSILON`` · (|P|∞ + ℓ)) suits a point on a surface.
+        A sensor can also lie just in front of a surface or on an edge, and then:
+
+        * a surface less than ε in front of it is crossed (a sensor 1 mm from a 200 m
+          wall and facing it, where ε = 3 mm, saw the sky behind the wall);
+        * on an edge or in a corner the origin lies in the plane of the adjacent
+          surface, and rays slip through between its triangles (a sensor in the floor
+          corner of a closed room saw the sun and the sky outside).
+
+        Probe rays correct this; a distance below ``ON_SURFACE_FRACTION``·ε counts as 0
+        (float32 round-off), i.e. the point lies on that surface.
+
+        1. Along n from P: a surface at 0 < t < 2ε (not parallel to n) puts the origin
+           halfway to it, P + t/2·n.  Facets of a sphere the point lies on are passed,
+           as :meth:`offset` does.
+        2. If a probe along ±t₁ or ±t₂ (the tangent plane) from the origin meets a
+           surface at t = 0, the origin lies in that surface's plane.  It then moves ε
+           within the tangent plane, in the first of 12 directions (30° apart) from
+           which no such probe meets a surface at t = 0 and a probe along −n still meets
+           the surface the sensor lies on: off the edge, into the face.  A sensor on no
+           surface has no such direction and keeps its origin.
+        3. Along ±t₁, ±t₂ again: a surface whose plane lies 0 < d < ε from the origin
+           pushes it along that surface's normal, turned towards it, to ε from the plane.
+
+        points, normals : (n, 3) [m] and unit; returns (n, 3) origins [m].
+        """
+        points = np.asarray(points, dtype=np.float64)
+        normals = np.asarray(normals, dtype=np.float64)
+        origins = self.offset(points, normals)
+        if len(points) == 0 or self._all is None:
+            return origins
+        eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        zero = ON_SURFACE_FRACTION * eps
+        # 1. a surface just in front
+        hits = self.intersect(points, normals)
+        t, prim = hits.t, np.maximum(hits.prim, 0)
+        facing = np.abs(np.einsum("ij,ij->i", self.normals[prim], normals)) > 1e-6
+        ahead = hits.hit & facing & (t > zero) & (t < 2.0 * eps)
+        sphere = np.where(ahead, self.triangles.sphere[prim], -1)
+        for s in np.unique(sphere[sphere >= 0]):
+            c, r = self.triangles.sphere_center[s], self.triangles.sphere_radius[s]
+            on = np.abs(np.linalg.norm(points - c, axis=1) - r) <= 2.0 * SPHERE_MAX_DEVIATION * r + eps
+            ahead &= ~((sphere == s) & on)
+        origins[ahead] = points[ahead] + 0.5 * t[ahead, None] * normals[ahead]
+        t1, t2 = orthonormal_basis(normals)
+
+        def in_a_plane(o, i):
+            """Which origins ``o`` of points ``i`` lie in the plane of a surface beside them."""
+            out = np.zeros(len(i), bool)
+            for u in (t1[i], -t1[i], t2[i], -t2[i]):
+                out |= self.intersect(o, u).t <= zero[i]
+            return out
+
+        # 2. an origin in the plane of an adjacent surface: off the edge, into the face
+        todo = np.flatnonzero(in_a_plane(origins, np.arange(len(points))))
+        if len(todo):
+            lift = np.linalg.norm(origins[todo] - points[todo], axis=1)
+            for angle in np.radians(np.arange(0.0, 360.0, 30.0) + 15.0):
+                if len(todo) == 0:
+                    break
+                step = np.cos(angle) * t1[todo] + np.sin(angle) * t2[todo]
+                c = origins[todo] + eps[todo, None] * step
+                back = self.intersect(c, -normals[todo])
+                ok = ~in_a_plane(c, todo) & (back.t <= lift + zero[todo])
+                origins[todo[ok]] = c[ok]
+                todo, lift = todo[~ok], lift[~ok]
+        # 3. a surface nearer than ε beside the origin
+        for u in (t1, -t1, t2, -t2):
+            hits = self.intersect(origins, u)
+            near = np.flatnonzero(hits.t < 2.0 * eps)
+            if len(near) == 0:
+                continue
+            ns = self.normals[hits.prim[near]]
+            cos = np.einsum("ij,ij->i", ns, u[near])
+            ns = np.where((cos > 0.0)[:, None], -ns, ns)               # towards the origin
+            d = hits.t[near] * np.abs(cos)
+            push = np.where(d > zero[near], np.maximum(eps[near] - d, 0.0), 0.0)
+            origins[near] += push[:, None] * ns
+        return origins

@@ -91,3 +91,21 @@ def test_light_surface_matches_the_disk_formula():
     E = compute_illuminance(scene, pts, nrm, DIRECT_ONLY).illuminance
     # 16 area samples per point, 400 points: the mean is within 1 % of the integral
     assert E.mean() == pytest.approx(reference, rel=0.01)
+
+
+def test_grazing_sun_cut_by_the_horizon_counts_only_the_part_above_it():
+    """Sun at 0.1°: the horizon of a horizontal sensor cuts the 0.27° disk.  Exact for a
+    uniform disk of radius δ whose centre is α above the plane (small angles):
+    E = E_dn/(π δ²) · [α A + (2/3)(δ² − α²)^{3/2}], A the disk's area above the plane;
+    the centre's cosine times the visible fraction gave 102 lux instead of 165."""
+    from lbl_illum.sun import SUN_SOLID_ANGLE
+    scene = make_scene([GROUND], MATS, sun={"altitude": 0.1, "azimuth": 0.0, "direct_normal_illuminance": 80000.0})
+    delta, alpha = np.arccos(1.0 - SUN_SOLID_ANGLE / (2 * np.pi)), np.radians(0.1)
+    area = np.pi * delta**2 - (delta**2 * np.arccos(alpha / delta) - alpha * np.sqrt(delta**2 - alpha**2))
+    exact = 80000.0 / (np.pi * delta**2) * (alpha * area + 2.0 / 3.0 * (delta**2 - alpha**2) ** 1.5)
+    n = 400
+    pts = np.column_stack([np.random.default_rng(0).uniform(-5, 5, (n, 2)), np.zeros(n)])
+    E = compute_illuminance(scene, pts, np.tile([0, 0, 1.0], (n, 1)), DIRECT_ONLY).illuminance
+    sem = E.std() / np.sqrt(n)
+    assert sem < 0.02 * exact
+    assert abs(E.mean() - exact) < 4 * sem

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from lbl_illum import Options, compute_illuminance, load_scene, read_points
+from lbl_illum.hemisphere import stratified_directions
 from lbl_illum.integrator import Integrator
 
 from conftest import EXAMPLES, GROUND, make_scene
@@ -89,6 +90,24 @@ def test_no_light_at_all_computes_nothing_indirect():
     result = compute_illuminance(scene, np.zeros((3, 3)), np.tile([0, 0, 1.0], (3, 1)), Options(bounces=4))
     assert np.all(result.illuminance == 0.0)
     assert sum(result.stats.records) == 0
+    # nothing can be lit, so not even the spacing probe is traced
+    assert result.stats.rays == 0
+
+
+def test_rays_count_this_run_only_and_a_covered_rerun_traces_none():
+    """A second compute on the same Integrator reports its own rays, not the total;
+    with the spacing limits given, all queries covered and no sun or light surface,
+    it traces nothing at all."""
+    scene = make_scene([GROUND], {"ground": {"type": "diffuse", "reflectance": 0.5}},
+                       sky={"type": "uniform", "horizontal_illuminance": 1000.0})
+    points, normals = np.zeros((4, 3)), np.tile([0, 0, 1.0], (4, 1))
+    points[:, 0] = np.linspace(-1.0, 1.0, 4)
+    integ = Integrator(scene, Options(bounces=1, samples=64, min_spacing=0.5, max_spacing=4.0))
+    first = integ.compute(points, normals)
+    again = integ.compute(points, normals)
+    assert first.stats.rays > 0
+    assert again.stats.primary_evaluations == 0
+    assert again.stats.rays == 0
 
 
 def test_more_bounces_add_light_and_converge_in_a_closed_box():
@@ -150,3 +169,57 @@ def test_point_samples_evaluate_every_point_and_start_the_cache_one_level_down()
     own = compute_illuminance(scene, pts, nrm, Options(bounces=2, samples=256, point_samples=256))
     assert shared.stats.new_records[0] == 1 and own.stats.new_records[0] == 2
     assert np.all(np.isfinite(own.illuminance)) and np.all(own.indirect > 0)
+
+
+def test_sensors_in_corners_and_on_edges_of_a_closed_room_see_no_daylight():
+    """A closed room under sun and sky is dark inside: E = 0 exactly, also for sensors
+    in its corners and on its edges (their ray origins once lay in the plane of the
+    adjacent wall, and rays slipped out through the edge)."""
+    scene = make_scene([{"shape": "box", "center": [2, 3, 1.5], "size": [4, 6, 3], "material": "wall"}],
+                       {"wall": {"type": "diffuse", "reflectance": 0.7}},
+                       sky={"type": "uniform", "horizontal_illuminance": 10000.0},
+                       sun={"altitude": 30, "azimuth": 200, "direct_normal_illuminance": 50000.0})
+    P = np.array([[0, 0, 0], [0, 0, 0], [0, 0, 0], [4, 6, 3], [2, 0, 0], [0, 3, 3], [4, 0, 1.5]], float)
+    N = np.array([[0, 0, 1], [1, 0, 0], [1, 1, 1], [-1, -1, -1], [0, 1, 1], [1, 0, 0], [-1, 1, 0]], float)
+    result = compute_illuminance(scene, P, N, Options(accuracy=0, bounces=1, samples=256))
+    assert np.all(result.illuminance == 0.0)
+
+
+def test_sensor_one_millimetre_from_a_large_wall_sees_the_wall():
+    """ε is 3 mm beside a 200 m wall: a sensor 1 mm in front of it, facing it, must see
+    the wall's luminance ρ E_wall / π over its whole hemisphere, not the sky behind.
+    E_wall = E_dn cos i + E_h / 2 + ρ_g E_gh / 2 (sun, half the uniform sky, half the
+    ground glow), so E = ρ E_wall up to the sliver of sky past the wall's edges."""
+    scene = make_scene([{"shape": "rectangle", "origin": [-100, 0, 0], "u": [200, 0, 0], "v": [0, 0, 100],
+                         "material": "wall"}], {"wall": {"type": "diffuse", "reflectance": 0.5}},
+                       sky={"type": "uniform", "horizontal_illuminance": 10000.0, "ground_reflectance": 0.2},
+                       sun={"altitude": 30, "azimuth": 180, "direct_normal_illuminance": 50000.0})
+    E_gh = 10000.0 + 50000.0 * np.sin(np.radians(30))
+    E_wall = 50000.0 * np.cos(np.radians(30)) + 10000.0 / 2 + 0.2 * E_gh / 2
+    result = compute_illuminance(scene, np.array([[0.0, -1e-3, 50.0]]), np.array([[0.0, 1.0, 0.0]]),
+                                 Options(bounces=1, samples=256))
+    assert result.illuminance[0] == pytest.approx(0.5 * E_wall, rel=2e-3)
+
+
+def test_known_gradient_limit_skips_unlit_records_and_keeps_the_lit_ones():
+    """Records whose rays found no light at trace time get no limit (∞) without their
+    gradients being computed; a lit record's limit does not depend on the unlit ones
+    traced with it (the sphere on its plane has no sky, so none of its records is lit)."""
+    scene = make_scene([GROUND], {"ground": {"type": "diffuse", "reflectance": 0.2}},
+                       sky={"type": "cie-overcast", "horizontal_illuminance": 10000.0})
+    integ = Integrator(scene, Options(bounces=1))
+    m, n = 4, 12
+    rng = np.random.default_rng(3)
+    normals = np.array([[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [1.0, 0.0, 0.0]])
+    dirs = stratified_directions(normals, m, n, rng).reshape(-1, 3)
+    t = rng.uniform(0.5, 5.0, len(dirs))
+    radiance = np.repeat(rng.uniform(0.0, 100.0, (len(dirs), 1)), 3, axis=1)
+    radiance[m * n: 2 * m * n] = 0.0                      # the second record saw nothing
+    both = integ._known_gradient_limit(normals, dirs, radiance, t, m, n)
+    assert np.isinf(both[1]) and np.all(np.isfinite(both[[0, 2]]))
+    for i in (0, 2):
+        alone = integ._known_gradient_limit(normals[i:i + 1], dirs[i * m * n:(i + 1) * m * n],
+                                            radiance[i * m * n:(i + 1) * m * n], t[i * m * n:(i + 1) * m * n], m, n)
+        assert alone[0] == pytest.approx(both[i], rel=1e-12)
+    dark = integ._known_gradient_limit(normals, dirs, np.zeros_like(radiance), t, m, n)
+    assert np.all(np.isinf(dark))
