@@ -78,6 +78,9 @@ SPACING_RATIO = 16.0
 PORTAL_SAMPLE_FRACTION = 0.5
 #: Passes of placement before all remaining uncovered queries are taken at once.
 MAX_PASSES = 64
+#: Hemisphere rays traced in one batch: the records of a pass are traced in blocks of at
+#: most this many rays, which bounds the temporary arrays of a pass (about 300 bytes a ray).
+MAX_BATCH_RAYS = 1 << 20
 
 # random-stream tags
 _TAG_HEMISPHERE, _TAG_DIRECT_HITS, _TAG_DIRECT_QUERIES, _TAG_PROBE = 1, 2, 3, 4
@@ -144,6 +147,9 @@ class _Pending:
     records: list = field(default_factory=list)     # record indices per pass
     known: list = field(default_factory=list)       # (r, 3) radiance sums known at trace time
     samples: list = field(default_factory=list)     # rays per record of each pass
+    # Diffuse hits, the next level's queries, are kept until the level is evaluated, for
+    # every level at once: positions in float64, normals and weights in float32, indices
+    # in int32 (68 bytes a hit instead of 112).
     hit_P: list = field(default_factory=list)       # diffuse hits: the next level's queries
     hit_Ns: list = field(default_factory=list)
     hit_Ng: list = field(default_factory=list)
@@ -387,13 +393,13 @@ class Integrator:
                 if pending.ray_L:   # the ambient value is part of each ray's radiance
                     np.add.at(pending.ray_L[-1], hemi_ray, hemi_weight * self.options.ambient)
         else:
-            base = sum(len(x) for x in pending.records)
+            base = sum(len(x) for x in pending.samples)      # records traced before these
             pending.hit_P.append(hits["P"])
-            pending.hit_Ns.append(hits["Ns"])
-            pending.hit_Ng.append(hits["Ng"])
-            pending.hit_weight.append(hit_weight)
-            pending.hit_owner.append(owner_local + base)
-            pending.hit_ray.append(hit_ray)
+            pending.hit_Ns.append(hits["Ns"].astype(np.float32))
+            pending.hit_Ng.append(hits["Ng"].astype(np.float32))
+            pending.hit_weight.append(hit_weight.astype(np.float32))
+            pending.hit_owner.append((owner_local + base).astype(np.int32))
+            pending.hit_ray.append(hit_ray.astype(np.int32))
         pending.known.append(known)
         pending.samples.append(np.full(r, S))
         inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
@@ -482,6 +488,21 @@ class Integrator:
             known[:, c] = np.bincount(owner[use], radiance[:, c], minlength=r)
         return known, {key: p_hits[key] for key in empty}, owner[use][p_hits["ray"]]
 
+    def _trace_records(self, k, P, Ns, Ng, pending: _Pending, key: int):
+        """:meth:`_evaluate_hemispheres` for new records of level k, in blocks of at most
+        ``MAX_BATCH_RAYS`` rays; block b's random stream is keyed by ``key`` plus the
+        index of its first record, so one block draws what the whole batch did."""
+        per = max(1, MAX_BATCH_RAYS // max(1, self.options.level_samples(k)))
+        if len(P) <= per:
+            return self._evaluate_hemispheres(k, P, Ns, Ng, pending, self._rng(_TAG_HEMISPHERE, k, key))
+        parts = []
+        for start in range(0, len(P), per):
+            block = slice(start, start + per)
+            rng = self._rng(_TAG_HEMISPHERE, k, key + start)
+            parts.append(self._evaluate_hemispheres(k, P[block], Ns[block], Ng[block], pending, rng))
+            self._tick()
+        return np.concatenate(parts)
+
     def _clamp_radius(self, R0, P):
         lo_box, hi_box = self._roi
         outside = np.maximum(0.0, np.maximum(lo_box - P, P - hi_box))
@@ -500,9 +521,10 @@ class Integrator:
         stats.queries[k] += nq
         if nq == 0:
             return pending, None
+        Ns = np.asarray(Ns, np.float64)
+        Ng = np.asarray(Ng, np.float64)
         if lv.accuracy == 0.0:
-            rng = self._rng(_TAG_HEMISPHERE, k, lv.count)
-            R0 = self._evaluate_hemispheres(k, P, Ns, Ng, pending, rng)
+            R0 = self._trace_records(k, P, Ns, Ng, pending, lv.count)
             idx = lv.add(P, Ns, self._clamp_radius(R0, P))
             pending.records.append(idx)
             stats.new_records[k] += nq
@@ -524,8 +546,7 @@ class Integrator:
             else:
                 local = pick_per_cell(P[todo], Ns[todo], band, cell)
             pick = todo[local]
-            rng = self._rng(_TAG_HEMISPHERE, k, lv.count)
-            R0 = self._evaluate_hemispheres(k, P[pick], Ns[pick], Ng[pick], pending, rng)
+            R0 = self._trace_records(k, P[pick], Ns[pick], Ng[pick], pending, lv.count)
             R = self._clamp_radius(R0, P[pick])
             pending.records.append(lv.add(P[pick], Ns[pick], R))
             stats.new_records[k] += len(pick)
@@ -561,9 +582,11 @@ class Integrator:
         S = pending.cat("samples", width=0, dtype=np.int64)
         ray_L = pending.cat("ray_L").astype(np.float64) if pending.ray_L else None
         if k < self.options.bounces:
-            hP, hNs, hNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
-            weight = pending.cat("hit_weight")
-            owner = pending.cat("hit_owner", width=0, dtype=np.int64)
+            hP = pending.cat("hit_P")
+            hNs = pending.cat("hit_Ns", dtype=np.float32).astype(np.float64)
+            hNg = pending.cat("hit_Ng", dtype=np.float32).astype(np.float64)
+            weight = pending.cat("hit_weight", dtype=np.float32)
+            owner = pending.cat("hit_owner", width=0, dtype=np.int32)
             if len(owner):
                 E_hit = self.direct.illuminance(hP, hNs, hNg, self._rng(_TAG_DIRECT_HITS, k, lv.count))
                 if next_answer is not None:
@@ -572,7 +595,7 @@ class Integrator:
                 for c in range(3):
                     known[:, c] += np.bincount(owner, weights=contrib[:, c], minlength=len(records))
                 if ray_L is not None:   # each hemisphere ray's own radiance, without its MIS weight
-                    ray = pending.cat("hit_ray", width=0, dtype=np.int64)
+                    ray = pending.cat("hit_ray", width=0, dtype=np.int32)
                     hemi = ray >= 0
                     mis = pending.cat("ray_mis", width=0, dtype=np.float32)[ray[hemi]]
                     np.add.at(ray_L, ray[hemi], contrib[hemi] / np.maximum(mis, 1e-12)[:, None])
