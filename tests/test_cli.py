@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from lbl_illum.cli import main
+from lbl_illum.options import PRESETS
 
 from conftest import EXAMPLES
 
@@ -159,7 +160,8 @@ def test_preset_and_explicit_option(sphere_job, capsys):
             "--bounces", "1", "--samples", "32", "--stats", tmp / "s.json"]
     assert run(args, capsys)[0] == 0
     settings = json.loads((tmp / "s.json").read_text())["settings"]
-    assert settings["accuracy"] == 0.3 and settings["samples"] == 32 and settings["bounces"] == 1
+    assert settings["accuracy"] == PRESETS["draft"]["accuracy"] and settings["samples"] == 32
+    assert settings["bounces"] == 1
 
 
 def test_unknown_preset_and_study_one_line(sphere_job, capsys):

@@ -155,6 +155,9 @@ def test_bounce_scaling_of_accuracy_is_capped_at_twice_the_first_level():
     assert a[0] == 0.1 and a[1] == pytest.approx(0.14) and a[2] == pytest.approx(0.196)
     assert max(a) == pytest.approx(0.2) and a[-1] == pytest.approx(0.2)
     assert Options(accuracy=0.1, bounce_scaling=False).level_accuracy(7) == 0.1
+    # growth stops at 0.4; a larger a given by the user is kept as it is
+    assert [Options(accuracy=0.3).level_accuracy(k) for k in (0, 1, 5)] == [0.3, 0.4, 0.4]
+    assert Options(accuracy=0.5).level_accuracy(3) == 0.5
 
 
 def test_point_samples_evaluate_every_point_and_start_the_cache_one_level_down():
