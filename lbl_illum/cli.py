@@ -199,6 +199,10 @@ def _run_validate(args) -> int:
 
     from .studies import STUDIES, StudyContext, run_study
 
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        raise InputError("validate: the reports need matplotlib; install it with pip install 'lbl_illum[plots]'")
     names = list(STUDIES) if args.study == "all" else [args.study]
     report_dir = Path(args.report)
     if report_dir.exists() and not report_dir.is_dir():

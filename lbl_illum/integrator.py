@@ -604,11 +604,17 @@ class Integrator:
         if ray_L is not None:
             m, n = pending.cells
             r = len(records)
-            rot, trans = irradiance_gradients(
-                lv.N[records].astype(np.float64), pending.cat("ray_dir").reshape(r, m, n, 3).astype(np.float64),
-                ray_L.reshape(r, m, n, 3), pending.cat("ray_t", width=0, dtype=np.float32).reshape(r, m, n))
-            lv.Gr[records], lv.Gt[records] = limit_gradients(
-                lv.E[records], rot, trans, lv.accuracy * lv.R[records].astype(np.float64), lv.accuracy)
+            dirs = pending.cat("ray_dir").reshape(r, m, n, 3)
+            ray_t = pending.cat("ray_t", width=0, dtype=np.float32).reshape(r, m, n)
+            ray_L = ray_L.reshape(r, m, n, 3)
+            per = max(1, MAX_BATCH_RAYS // (m * n))       # bounds the temporaries, as in placement
+            for start in range(0, r, per):
+                part = slice(start, start + per)
+                rec = records[part]
+                rot, trans = irradiance_gradients(lv.N[rec].astype(np.float64), dirs[part].astype(np.float64),
+                                                  ray_L[part], ray_t[part])
+                lv.Gr[rec], lv.Gt[rec] = limit_gradients(
+                    lv.E[rec], rot, trans, lv.accuracy * lv.R[rec].astype(np.float64), lv.accuracy)
 
     # -- the whole calculation -----------------------------------------------------------
     def compute(self, points, normals) -> IlluminanceResult:

@@ -71,16 +71,21 @@ MIN_DEEP_SAMPLES = 16
 #: ``office-tradeoff`` study measures (docs/validation/office-tradeoff/report.md).
 #: Each sets exactly these four options.
 PRESETS: dict[str, dict[str, Any]] = {
-    "draft": {"accuracy": 0.2, "samples": 256, "bounces": 5, "point_samples": None},
-    "low": {"accuracy": 0.15, "samples": 256, "bounces": 6, "point_samples": None},
-    "medium": {"accuracy": 0.1, "samples": 256, "bounces": 8, "point_samples": None},
+    "draft": {"accuracy": 0.2, "samples": 256, "bounces": 8, "point_samples": None},
+    "low": {"accuracy": 0.15, "samples": 256, "bounces": 8, "point_samples": None},
+    "medium": {"accuracy": 0.14, "samples": 256, "bounces": 8, "point_samples": 1024},
     "high": {"accuracy": 0.1, "samples": 1024, "bounces": 8, "point_samples": None},
 }
 
 #: What each preset measured on examples/office (77 sensors, CIE overcast sky, 2 cores)
 #: against the converged reference: (seconds, mean relative error, max relative error).
 #: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
-PRESET_MEASURED: dict[str, tuple[float, float, float]] = {}
+PRESET_MEASURED: dict[str, tuple[float, float, float]] = {
+    "draft": (0.97, 0.0199, 0.0567),
+    "low": (1.74, 0.0166, 0.0500),
+    "medium": (7.32, 0.0072, 0.0200),
+    "high": (21.50, 0.0043, 0.0164),
+}
 
 
 def preset_table() -> str:
@@ -90,6 +95,8 @@ def preset_table() -> str:
         text = f"  {name:7s} a {p['accuracy']:g} / {p['samples']} / {p['bounces']}"
         if p["point_samples"]:
             text += f", point samples {p['point_samples']}"
+        if all(getattr(Options(), key) == value for key, value in p.items()):
+            text += " (the defaults)"
         if name in PRESET_MEASURED:
             sec, mean, worst = PRESET_MEASURED[name]
             text += f": {100 * mean:.1f} % mean, {100 * worst:.1f} % max error, {sec:.1f} s"
