@@ -68,6 +68,25 @@ class _Parser(argparse.ArgumentParser):
         raise InputError(f"{self.prog}: {message}")
 
 
+def _studies():
+    """The validation studies: the installed package ``lbl_illum_studies``, or, in a
+    source checkout used without installing, ``validation/studies`` beside the package."""
+    try:
+        import lbl_illum_studies
+    except ImportError:
+        import importlib.util
+
+        init = Path(__file__).resolve().parent.parent / "validation" / "studies" / "__init__.py"
+        if not init.is_file():
+            raise InputError("lbl-illum: the validation studies are not installed (pip install lbl_illum)") from None
+        spec = importlib.util.spec_from_file_location("lbl_illum_studies", init,
+                                                      submodule_search_locations=[str(init.parent)])
+        lbl_illum_studies = importlib.util.module_from_spec(spec)
+        sys.modules["lbl_illum_studies"] = lbl_illum_studies
+        spec.loader.exec_module(lbl_illum_studies)
+    return lbl_illum_studies
+
+
 def _build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="lbl-illum", description="Illuminance in daylit rooms by the irradiance cache of "
                      "Ward, Rubinstein & Clear (1988).")
@@ -106,8 +125,10 @@ def _build_parser() -> argparse.ArgumentParser:
     r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
 
-    from .studies import STUDIES
-
+    try:
+        STUDIES = _studies().STUDIES
+    except InputError:        # said when the command is used
+        STUDIES = {}
     v = sub.add_parser("validate", help="run a validation study and write its report",
                        description="Run a validation study against analytic or converged reference values "
                        "and write DIR/NAME/report.md, report.html, PNG plots and results.json (every number "
@@ -197,7 +218,8 @@ def _run_illuminance(args) -> int:
 def _run_validate(args) -> int:
     from tqdm import tqdm
 
-    from .studies import STUDIES, StudyContext, run_study
+    studies = _studies()
+    STUDIES, StudyContext, run_study = studies.STUDIES, studies.StudyContext, studies.run_study
 
     import importlib.util
 

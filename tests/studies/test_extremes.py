@@ -11,8 +11,8 @@ import pytest
 
 from lbl_illum import Options
 from lbl_illum.integrator import RunStats
-from lbl_illum.studies import extremes as ex
-from lbl_illum.studies.report import StudyContext
+from lbl_illum_studies import extremes as ex
+from lbl_illum_studies.report import StudyContext
 from lbl_illum.sun import SUN_SOLID_ANGLE, Sun
 
 

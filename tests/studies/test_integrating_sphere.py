@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from lbl_illum.studies import integrating_sphere as study
-from lbl_illum.studies.report import StudyContext
+from lbl_illum_studies import integrating_sphere as study
+from lbl_illum_studies.report import StudyContext
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from lbl_illum.studies.report import Report, error_summary, fmt, new_figure, pct
+from lbl_illum_studies.report import Report, error_summary, fmt, new_figure, pct
 
 
 def sample_report():

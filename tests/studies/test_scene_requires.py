@@ -13,8 +13,8 @@ import pytest
 from lbl_illum import read_points
 from lbl_illum.cache import LevelRecords
 from lbl_illum.errors import InputError
-from lbl_illum.studies import scene_requires as sr
-from lbl_illum.studies.report import StudyContext
+from lbl_illum_studies import scene_requires as sr
+from lbl_illum_studies.report import StudyContext
 
 from conftest import EXAMPLES
 

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from lbl_illum import Integrator, Options
-from lbl_illum.studies import sphere_plane as sp
-from lbl_illum.studies import sphere_plane_reference as ref
-from lbl_illum.studies.report import StudyContext
+from lbl_illum_studies import sphere_plane as sp
+from lbl_illum_studies import sphere_plane_reference as ref
+from lbl_illum_studies.report import StudyContext
 
 
 # -- the reference ---------------------------------------------------------------------------

@@ -3,7 +3,7 @@ computed answer, or measures what a setting costs and buys, and writes a report.
 
 Run one with ``lbl-illum validate NAME [--report DIR] [--quick]``.  These modules live
 in the repository's ``validation/studies/`` folder and are installed as the package
-``lbl_illum.studies`` (see ``pyproject.toml``), so the command works from a source
+``lbl_illum_studies`` (see ``pyproject.toml``), so the command works from a source
 checkout and from an installed copy alike.
 
 A study module has ``TITLE`` and ``run(ctx: StudyContext) -> Report``; ``ctx.quick``

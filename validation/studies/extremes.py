@@ -955,7 +955,7 @@ def memory_probe(ctx, samples: int) -> dict:
     import sys
 
     code = ("import json, resource; from lbl_illum import Integrator, Options; "
-            "from lbl_illum.studies import extremes as ex; P, N = ex.workplane(); "
+            "from lbl_illum_studies import extremes as ex; P, N = ex.workplane(); "
             f"r = Integrator(ex.room_scene(), Options(samples={int(samples)}, bounces=1)).compute(P, N); "
             "print(json.dumps({'rss_mb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
             "'rays': int(r.stats.rays), 'records': list(r.stats.new_records), 'seconds': r.stats.seconds}))")
