@@ -123,12 +123,12 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
     ----------
     normals : (r, 3) unit normals of the records
     directions : (r, M, N, 3) the sample directions, stratum (j, k) at [:, j, k]
-    radiance : (r, M, N, 3) RGB radiance along them [cd/m²]
+    radiance : (r, M, N, C) radiance along them [cd/m²], C channels (3 for RGB)
     distances : (r, M, N) hit distances [m], inf for rays that reach the sky
 
     Returns
     -------
-    (rotational, translational) : (r, 3, 3) each — [record, channel, axis], in lux per
+    (rotational, translational) : (r, C, 3) each — [record, channel, axis], in lux per
     radian and lux per metre.
     """
     r, m, n = distances.shape
@@ -143,7 +143,7 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
 
     distances = np.asarray(distances, np.float64)
     inv = np.where(np.isfinite(distances), 1.0 / np.maximum(distances, MIN_GRADIENT_DISTANCE), 0.0)
-    trans = np.zeros((r, 3, 3))
+    trans = np.zeros((r, radiance.shape[-1], 3))
     if m > 1:   # differences across θ boundaries, along the stratum's centre direction
         j = np.arange(1, m)
         s2 = j / m

@@ -423,9 +423,8 @@ class Integrator:
         lit = np.flatnonzero(E > 0)       # the gradients of unlit records are not computed
         if len(lit) == 0:
             return limit
-        rgb = np.repeat(Y[lit, ..., None], 3, axis=-1)
-        _, trans = irradiance_gradients(normals[lit], dirs.reshape(r, m, n, 3)[lit], rgb,
-                                        first_t.reshape(r, m, n)[lit])
+        _, trans = irradiance_gradients(normals[lit], dirs.reshape(r, m, n, 3)[lit], Y[lit, ..., None],
+                                        first_t.reshape(r, m, n)[lit])     # one channel: luminance
         g = np.linalg.norm(trans[:, 0, :], axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
             limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
