@@ -13,6 +13,9 @@ solid angle, so the estimate is an unweighted mean.  N ≈ π M keeps cells squa
 from __future__ import annotations
 
 import numpy as np
+from numba import prange
+
+from .compiled import PARALLEL_MIN, serial_and_parallel
 
 __all__ = ["orthonormal_basis", "cell_counts", "stratified_directions", "cosine_directions",
            "irradiance_gradients", "limit_gradients"]
@@ -131,36 +134,77 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
     (rotational, translational) : (r, C, 3) each — [record, channel, axis], in lux per
     radian and lux per metre.
     """
-    r, m, n = distances.shape
-    t, b = orthonormal_basis(normals)
-    cos = np.clip(np.einsum("rjkx,rx->rjk", directions, normals), 1e-3, 1.0)
-    sin = np.sqrt(1.0 - cos * cos)
-    x = np.einsum("rjkx,rx->rjk", directions, t)
-    y = np.einsum("rjkx,rx->rjk", directions, b)
-    phi = np.arctan2(y, x)
-    v = -np.sin(phi)[..., None] * t[:, None, None, :] + np.cos(phi)[..., None] * b[:, None, None, :]
-    rot = np.pi / (m * n) * np.einsum("rjk,rjkc,rjkx->rcx", sin / cos, radiance, v)
-
-    distances = np.asarray(distances, np.float64)
-    inv = np.where(np.isfinite(distances), 1.0 / np.maximum(distances, MIN_GRADIENT_DISTANCE), 0.0)
-    trans = np.zeros((r, radiance.shape[-1], 3))
-    if m > 1:   # differences across θ boundaries, along the stratum's centre direction
-        j = np.arange(1, m)
-        s2 = j / m
-        coef = np.sqrt(s2) * (1.0 - s2)                                     # sin θ− cos² θ−
-        near = np.maximum(inv[:, 1:, :], inv[:, :-1, :])                    # 1 / min(r, r')
-        dL = radiance[:, 1:, :, :] - radiance[:, :-1, :, :]
-        phi_c = 2.0 * np.pi * (np.arange(n) + 0.5) / n
-        u = np.cos(phi_c)[None, :, None] * t[:, None, :] + np.sin(phi_c)[None, :, None] * b[:, None, :]
-        A = (2.0 * np.pi / n) * np.einsum("j,rjk,rjkc->rkc", coef, near, dL)
-        trans += np.einsum("rkc,rkx->rcx", A, u)
-    if n > 1:   # differences across φ boundaries, perpendicular to them
-        j = np.arange(m)
-        coef = np.sqrt((j + 1) / m) - np.sqrt(j / m)                       # sin θ+ − sin θ−
-        near = np.maximum(inv, np.roll(inv, 1, axis=2))
-        dL = radiance - np.roll(radiance, 1, axis=2)
-        phi_b = 2.0 * np.pi * np.arange(n) / n
-        vb = -np.sin(phi_b)[None, :, None] * t[:, None, :] + np.cos(phi_b)[None, :, None] * b[:, None, :]
-        B = np.einsum("j,rjk,rjkc->rkc", coef, near, dL)
-        trans += np.einsum("rkc,rkx->rcx", B, vb)
+    directions = np.asarray(directions)
+    radiance = np.asarray(radiance)
+    distances = np.asarray(distances)
+    r = distances.shape[0]
+    C = radiance.shape[-1]
+    rot = np.zeros((r, C, 3))
+    trans = np.zeros((r, C, 3))
+    if r:
+        kernel = _gradients_kernels[r * distances.shape[1] * distances.shape[2] >= PARALLEL_MIN]
+        kernel(np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions),
+               np.ascontiguousarray(radiance), np.ascontiguousarray(distances), rot, trans)
     return rot, trans
+
+
+def _gradients(normals, directions, radiance, distances, rot, trans):
+    """Compiled body of :func:`irradiance_gradients`: one record per iteration."""
+    r, m, n = distances.shape
+    C = radiance.shape[3]
+    for i in prange(r):
+        nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
+        sign = 1.0 if nz >= 0.0 else -1.0          # Duff et al. 2017, as orthonormal_basis
+        a = -1.0 / (sign + nz)
+        b = nx * ny * a
+        tx, ty, tz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
+        bx, by, bz = b, sign + ny * ny * a, -ny
+        scale = np.pi / (m * n)
+        inv = np.empty((m, n))
+        for j in range(m):
+            for k in range(n):
+                dx, dy, dz = directions[i, j, k, 0], directions[i, j, k, 1], directions[i, j, k, 2]
+                cos = min(max(dx * nx + dy * ny + dz * nz, 1e-3), 1.0)
+                tan = np.sqrt(1.0 - cos * cos) / cos
+                phi = np.arctan2(dx * bx + dy * by + dz * bz, dx * tx + dy * ty + dz * tz)
+                s, c = np.sin(phi), np.cos(phi)
+                vx, vy, vz = -s * tx + c * bx, -s * ty + c * by, -s * tz + c * bz
+                for ch in range(C):
+                    w = scale * tan * radiance[i, j, k, ch]
+                    rot[i, ch, 0] += w * vx
+                    rot[i, ch, 1] += w * vy
+                    rot[i, ch, 2] += w * vz
+                dist = distances[i, j, k]
+                inv[j, k] = 1.0 / max(dist, MIN_GRADIENT_DISTANCE) if np.isfinite(dist) else 0.0
+        for k in range(n):
+            if m > 1:      # θ boundaries, along the stratum's centre direction
+                phi = 2.0 * np.pi * (k + 0.5) / n
+                ux, uy, uz = (np.cos(phi) * tx + np.sin(phi) * bx, np.cos(phi) * ty + np.sin(phi) * by,
+                              np.cos(phi) * tz + np.sin(phi) * bz)
+                for ch in range(C):
+                    acc = 0.0
+                    for j in range(1, m):
+                        s2 = j / m
+                        near = max(inv[j, k], inv[j - 1, k])
+                        acc += np.sqrt(s2) * (1.0 - s2) * near * (radiance[i, j, k, ch] - radiance[i, j - 1, k, ch])
+                    acc *= 2.0 * np.pi / n
+                    trans[i, ch, 0] += acc * ux
+                    trans[i, ch, 1] += acc * uy
+                    trans[i, ch, 2] += acc * uz
+            if n > 1:      # φ boundaries, perpendicular to them
+                phi = 2.0 * np.pi * k / n
+                ux, uy, uz = (-np.sin(phi) * tx + np.cos(phi) * bx, -np.sin(phi) * ty + np.cos(phi) * by,
+                              -np.sin(phi) * tz + np.cos(phi) * bz)
+                kp = k - 1 if k > 0 else n - 1
+                for ch in range(C):
+                    acc = 0.0
+                    for j in range(m):
+                        coef = np.sqrt((j + 1) / m) - np.sqrt(j / m)
+                        near = max(inv[j, k], inv[j, kp])
+                        acc += coef * near * (radiance[i, j, k, ch] - radiance[i, j, kp, ch])
+                    trans[i, ch, 0] += acc * ux
+                    trans[i, ch, 1] += acc * uy
+                    trans[i, ch, 2] += acc * uz
+
+
+_gradients_kernels = serial_and_parallel(_gradients)

@@ -51,6 +51,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from .cache import IrradianceCache, LevelRecords
 from .direct import DirectLight
@@ -84,6 +85,22 @@ MAX_BATCH_RAYS = 1 << 20
 
 # random-stream tags
 _TAG_HEMISPHERE, _TAG_DIRECT_HITS, _TAG_DIRECT_QUERIES, _TAG_PROBE = 1, 2, 3, 4
+
+
+@njit(cache=True)
+def _add_hit_light(owner, weight, E_hit, known, ray, mis, ray_L):
+    """known[owner[h]] += weight[h] E_hit[h];  ray_L[ray[h]] += the same / mis[ray[h]] for
+    hits of hemisphere rays (ray ≥ 0; portal samples have -1).  ``ray`` empty: no ray sums."""
+    rays = ray.shape[0] > 0
+    for h in range(owner.shape[0]):
+        i = owner[h]
+        r = ray[h] if rays else -1
+        scale = 1.0 / max(mis[r], 1e-12) if r >= 0 else 0.0
+        for c in range(3):
+            v = weight[h, c] * E_hit[h, c]
+            known[i, c] += v
+            if r >= 0:
+                ray_L[r, c] += v * scale
 
 
 @dataclass
@@ -590,14 +607,14 @@ class Integrator:
                 E_hit = self.direct.illuminance(hP, hNs, hNg, self._rng(_TAG_DIRECT_HITS, k, lv.count))
                 if next_answer is not None:
                     E_hit += next_answer
-                contrib = weight * E_hit
-                for c in range(3):
-                    known[:, c] += np.bincount(owner, weights=contrib[:, c], minlength=len(records))
-                if ray_L is not None:   # each hemisphere ray's own radiance, without its MIS weight
-                    ray = pending.cat("hit_ray", width=0, dtype=np.int32)
-                    hemi = ray >= 0
-                    mis = pending.cat("ray_mis", width=0, dtype=np.float32)[ray[hemi]]
-                    np.add.at(ray_L, ray[hemi], contrib[hemi] / np.maximum(mis, 1e-12)[:, None])
+                ray = pending.cat("hit_ray", width=0, dtype=np.int32) if ray_L is not None else None
+                mis = pending.cat("ray_mis", width=0, dtype=np.float32) if ray_L is not None else None
+                # each hit adds weight · E to its record and, without its MIS weight, to
+                # its hemisphere ray's own radiance (for the gradients)
+                _add_hit_light(owner, weight, E_hit, known,
+                               np.zeros(0, np.int32) if ray is None else ray,
+                               np.ones(0, np.float32) if mis is None else mis,
+                               np.zeros((0, 3)) if ray_L is None else ray_L)
                 self._tick()
         lv.E[records] = (np.pi / S)[:, None] * known
         if ray_L is not None:
@@ -610,8 +627,7 @@ class Integrator:
             for start in range(0, r, per):
                 part = slice(start, start + per)
                 rec = records[part]
-                rot, trans = irradiance_gradients(lv.N[rec].astype(np.float64), dirs[part].astype(np.float64),
-                                                  ray_L[part], ray_t[part])
+                rot, trans = irradiance_gradients(lv.N[rec].astype(np.float64), dirs[part], ray_L[part], ray_t[part])
                 lv.Gr[rec], lv.Gt[rec] = limit_gradients(
                     lv.E[rec], rot, trans, lv.accuracy * lv.R[rec].astype(np.float64), lv.accuracy)
 

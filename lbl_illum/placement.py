@@ -14,13 +14,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from .compiled import PARALLEL_MIN, serial_and_parallel
+
 __all__ = ["distance_bands", "pick_per_cell"]
 
 _HASH = (np.int64(73856093), np.int64(19349663), np.int64(83492791))
 
 
-@njit(cache=True, parallel=True)
-def distance_bands(P, lo, hi, max_spacing):
+def _distance_bands(P, lo, hi, max_spacing):
     """(n,) int64: ⌈log2(1 + δ / max_spacing)⌉, δ the distance from P to the box [lo, hi]."""
     n = P.shape[0]
     out = np.empty(n, np.int64)
@@ -33,7 +34,14 @@ def distance_bands(P, lo, hi, max_spacing):
     return out
 
 
-@njit(cache=True, parallel=True)
+_distance_bands_kernels = serial_and_parallel(_distance_bands)
+
+
+def distance_bands(P, lo, hi, max_spacing):
+    """(n,) int64: ⌈log2(1 + δ / max_spacing)⌉, δ the distance from P to the box [lo, hi]."""
+    return _distance_bands_kernels[len(P) >= PARALLEL_MIN](P, lo, hi, max_spacing)
+
+
 def _cell_keys(P, N, band, cell, key, off_centre):
     for q in prange(P.shape[0]):
         size = cell * 2.0 ** band[q]
@@ -54,6 +62,9 @@ def _cell_keys(P, N, band, cell, key, off_centre):
             off += f * f
         key[q] = h * np.int64(64) + (axis * 2 + sign) * np.int64(8) + min(band[q], 7)
         off_centre[q] = off
+
+
+_cell_keys_kernels = serial_and_parallel(_cell_keys)
 
 
 @njit(cache=True)
@@ -83,6 +94,7 @@ def pick_per_cell(P: np.ndarray, N: np.ndarray, band: np.ndarray, cell: float) -
     n = len(P)
     key = np.empty(n, np.int64)
     off_centre = np.empty(n, np.float64)
-    _cell_keys(np.ascontiguousarray(P), np.ascontiguousarray(N), band, float(cell), key, off_centre)
+    kernel = _cell_keys_kernels[n >= PARALLEL_MIN]
+    kernel(np.ascontiguousarray(P), np.ascontiguousarray(N), band, float(cell), key, off_centre)
     order = np.argsort(key, kind="stable")
     return _nearest_in_runs(order, key, off_centre)

@@ -27,9 +27,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import prange
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
+from .compiled import PARALLEL_MIN, serial_and_parallel
 from .geometry import SPHERE_MAX_DEVIATION, Triangles
 from .hemisphere import orthonormal_basis
 from .materials import GLASS
@@ -61,6 +63,30 @@ def thread_count() -> int:
 @lru_cache(maxsize=4)
 def _pool(threads: int) -> ThreadPoolExecutor:
     return ThreadPoolExecutor(max_workers=threads, thread_name_prefix="lbl-illum-trace")
+
+
+def _plane_hits_kernel(o, d, t, prim, index, normals, v0, p, ng):
+    """Hit points o + t d projected onto the plane of the triangle hit (float64), and its
+    normal turned towards the incoming ray."""
+    for q in prange(index.shape[0]):
+        i = index[q]
+        f = prim[i]
+        nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
+        x = o[i, 0] + t[i] * d[i, 0]
+        y = o[i, 1] + t[i] * d[i, 1]
+        z = o[i, 2] + t[i] * d[i, 2]
+        h = (x - v0[f, 0]) * nx + (y - v0[f, 1]) * ny + (z - v0[f, 2]) * nz
+        p[q, 0] = x - h * nx
+        p[q, 1] = y - h * ny
+        p[q, 2] = z - h * nz
+        if nx * d[i, 0] + ny * d[i, 1] + nz * d[i, 2] > 0.0:
+            nx, ny, nz = -nx, -ny, -nz
+        ng[q, 0] = nx
+        ng[q, 1] = ny
+        ng[q, 2] = nz
+
+
+_plane_hits = serial_and_parallel(_plane_hits_kernel)
 
 
 @dataclass
@@ -111,7 +137,9 @@ class Tracer:
         self._opaque = _embree_scene(verts[self._opaque_ids])
         self._glass = _embree_scene(verts[self._glass_ids])
         self._glass_tau = np.asarray(transmittance, dtype=np.float64)[triangles.material[self._glass_ids]]
-        self.normals = triangles.normals
+        self.normals = np.ascontiguousarray(triangles.normals, np.float64)
+        self._v0 = np.ascontiguousarray(verts[:, 0], np.float64)
+        self._has_spheres = bool(np.any(triangles.sphere >= 0))
         edges = np.linalg.norm(verts[:, 1] - verts[:, 0], axis=1)
         self.length_scale = float(np.median(edges)) if len(edges) else 1.0
 
@@ -197,17 +225,17 @@ class Tracer:
         """
         if index is None:
             index = np.flatnonzero(hits.hit)
-        o = np.asarray(origins, dtype=np.float64)[index]
-        d = np.asarray(directions, dtype=np.float64)[index]
-        prim = hits.prim[index]
-        p = o + hits.t[index][:, None] * d
-        ng = self.normals[prim]
-        v0 = self.triangles.vertices[prim, 0]
-        p -= np.einsum("ij,ij->i", p - v0, ng)[:, None] * ng          # onto the triangle's plane
-        flip = np.einsum("ij,ij->i", ng, d) > 0.0
-        ng = np.where(flip[:, None], -ng, ng)
+        index = np.asarray(index, np.int64)
+        p = np.empty((len(index), 3))
+        ng = np.empty((len(index), 3))
+        _plane_hits[len(index) >= PARALLEL_MIN](np.ascontiguousarray(origins, np.float64),
+                                                np.ascontiguousarray(directions, np.float64),
+                                                hits.t, hits.prim, index, self.normals, self._v0, p, ng)
         ns = ng.copy()
-        sphere = self.triangles.sphere[prim]
+        if not self._has_spheres:
+            return p, ng, ns
+        d = np.asarray(directions, dtype=np.float64)[index]
+        sphere = self.triangles.sphere[hits.prim[index]]
         on_sphere = np.flatnonzero(sphere >= 0)
         if len(on_sphere):
             c = self.triangles.sphere_center[sphere[on_sphere]]
