@@ -45,30 +45,46 @@ def cell_counts(samples: int) -> tuple[int, int]:
     return m, n
 
 
-def _to_world(normals, local):
-    t, s = orthonormal_basis(normals)
-    return (local[..., 0:1] * t[:, None, :] + local[..., 1:2] * s[:, None, :]
-            + local[..., 2:3] * normals[:, None, :])
+def _stratified(normals, u, v, m, n, out):
+    """Compiled body of :func:`stratified_directions`."""
+    for i in prange(normals.shape[0]):
+        nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
+        sign = 1.0 if nz >= 0.0 else -1.0          # Duff et al. 2017, as orthonormal_basis
+        a = -1.0 / (sign + nz)
+        b = nx * ny * a
+        tx, ty, tz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
+        bx, by, bz = b, sign + ny * ny * a, -ny
+        for j in range(m):
+            for k in range(n):
+                c = j * n + k
+                sin2 = (j + 1 - u[i, c]) / m
+                sin_t = np.sqrt(sin2)
+                cos_t = np.sqrt(max(0.0, 1.0 - sin2))
+                phi = 2.0 * np.pi * (k + 1 - v[i, c]) / n
+                x = sin_t * np.cos(phi)
+                y = sin_t * np.sin(phi)
+                out[i, c, 0] = x * tx + y * bx + cos_t * nx
+                out[i, c, 1] = x * ty + y * by + cos_t * ny
+                out[i, c, 2] = x * tz + y * bz + cos_t * nz
+
+
+_stratified_kernels = serial_and_parallel(_stratified)
 
 
 def stratified_directions(normals: np.ndarray, m: int, n: int, rng: np.random.Generator) -> np.ndarray:
     """(r, m·n, 3) unit directions of Eq. 2 over the hemispheres of (r, 3) ``normals``.
 
     Each of the m·n cells of every hemisphere receives one jittered direction;
-    every direction carries the weight π / (m n) of the estimate.
+    every direction carries the weight π / (m n) of the estimate: cell (j, k) (0-based,
+    index j·n + k) has sin²θ = (j + 1 − X)/M and φ = 2π (k + 1 − Y)/N.
     """
-    normals = np.asarray(normals, dtype=np.float64)
+    normals = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 3)
     r = normals.shape[0]
-    j = np.repeat(np.arange(1, m + 1), n)[None, :]
-    k = np.tile(np.arange(1, n + 1), m)[None, :]
     u = rng.random((r, m * n))
     v = rng.random((r, m * n))
-    sin2 = (j - u) / m
-    sin_t = np.sqrt(sin2)
-    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2))
-    phi = 2.0 * np.pi * (k - v) / n
-    local = np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), cos_t], axis=-1)
-    return _to_world(normals, local)
+    out = np.empty((r, m * n, 3))
+    _stratified_kernels[r * m * n >= PARALLEL_MIN](normals, u, v, m, n, out)
+    return out
 
 
 def cosine_directions(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:

@@ -552,7 +552,9 @@ class Integrator:
         else:
             todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
-        band = distance_bands(P[todo], *self._roi, self.max_spacing)
+        # the uncovered queries, compacted after every pass
+        tP, tN, tNg = P[todo], Ns[todo], Ng[todo]
+        band = distance_bands(tP, *self._roi, self.max_spacing)
         cell = 2.0 * lv.accuracy * self.max_spacing
         passes = 0
         while len(todo):
@@ -560,21 +562,22 @@ class Integrator:
             if passes >= MAX_PASSES:
                 local = np.arange(len(todo))
             else:
-                local = pick_per_cell(P[todo], Ns[todo], band, cell)
-            pick = todo[local]
-            R0 = self._trace_records(k, P[pick], Ns[pick], Ng[pick], pending, lv.count)
-            R = self._clamp_radius(R0, P[pick])
-            pending.records.append(lv.add(P[pick], Ns[pick], R))
-            stats.new_records[k] += len(pick)
+                local = pick_per_cell(tP, tN, band, cell)
+            pP, pN = tP[local], tN[local]
+            R0 = self._trace_records(k, pP, pN, tNg[local], pending, lv.count)
+            R = self._clamp_radius(R0, pP)
+            pending.records.append(lv.add(pP, pN, R))
+            stats.new_records[k] += len(local)
             keep = np.ones(len(todo), bool)
             keep[local] = False
-            todo, band = todo[keep], band[keep]
-            if len(todo):
+            if keep.any():
                 # only this pass's records can cover what was uncovered before it
-                fresh = LevelRecords(lv.accuracy, lv.node_center[0], lv.node_half[0], capacity=len(pick))
-                fresh.add(P[pick], Ns[pick], R)
-                _, _, count = fresh.lookup(P[todo], Ns[todo])
-                todo, band = todo[count == 0], band[count == 0]
+                fresh = LevelRecords(lv.accuracy, lv.node_center[0], lv.node_half[0], capacity=len(local))
+                fresh.add(pP, pN, R)
+                idx = np.flatnonzero(keep)
+                _, _, count = fresh.lookup(tP[idx], tN[idx])
+                keep[idx[count > 0]] = False
+            todo, tP, tN, tNg, band = todo[keep], tP[keep], tN[keep], tNg[keep], band[keep]
             cell *= 0.5
             self._tick()
         return pending, None

@@ -27,8 +27,11 @@ between versions of the code.  Speed is never asserted in the tests.
 
 Usage (from the repository root)::
 
-    python validation/bench_engine.py [--scene examples/office/scene.toml]
-        [--points examples/office/grid.pts] [--repeat N] [--json out.json]
+    python validation/bench/engine.py [--scene examples/office/scene.toml]
+        [--points examples/office/grid.pts] [--preset NAME] [--repeat N] [--json out.json]
+
+5. **Cores.**  The engine once more on one core (numba's kernels and the ray-casting
+   pool limited to one thread) and the speed-up of two (all) cores over one.
 """
 
 from __future__ import annotations
@@ -47,11 +50,14 @@ import numpy as np
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
+import numba
+
 from lbl_illum import Options, load_scene, read_points
+from lbl_illum.options import PRESETS
 from lbl_illum.integrator import Integrator
 from lbl_illum.raycast import thread_count
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_SCENE = ROOT / "examples" / "office" / "scene.toml"
 DEFAULT_POINTS = ROOT / "examples" / "office" / "grid.pts"
 
@@ -78,10 +84,11 @@ SEED = 12345
 
 def parse_args(argv=None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
-        prog="bench_engine.py",
+        prog="engine.py",
         description="Engine rays/s against raw embree rays/s on the same scene, in one run.")
     parser.add_argument("--scene", default=str(DEFAULT_SCENE), help="scene file (default: the office example)")
     parser.add_argument("--points", default=str(DEFAULT_POINTS), help="sensor points .pts (default: office grid)")
+    parser.add_argument("--preset", choices=sorted(PRESETS), help="run at this preset instead of the scene's settings")
     parser.add_argument("--repeat", type=int, default=1, help="timed runs of each measurement; the best is used")
     parser.add_argument("--json", metavar="OUT.json", help="also write every figure to this JSON file")
     args = parser.parse_args(argv)
@@ -131,11 +138,25 @@ def run_engine(scene, points, normals, options: Options) -> dict:
             "mean_illuminance": float(np.mean(result.illuminance))}
 
 
-def bench_engine(scene, points, normals, options: Options, repeat: int) -> dict:
-    """Best (fastest) of ``repeat`` engine runs, with every run's figures."""
-    runs = [run_engine(scene, points, normals, options) for _ in range(repeat)]
+def bench_engine(scene, points, normals, options: Options, repeat: int, threads: int | None = None) -> dict:
+    """Best (fastest) of ``repeat`` engine runs, with every run's figures.
+
+    ``threads``: limit numba's kernels and the ray-casting pool to this many threads.
+    """
+    saved_env, saved_numba = os.environ.get("LBL_ILLUM_THREADS"), numba.get_num_threads()
+    if threads is not None:
+        os.environ["LBL_ILLUM_THREADS"] = str(threads)
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        runs = [run_engine(scene, points, normals, options) for _ in range(repeat)]
+    finally:
+        if saved_env is None:
+            os.environ.pop("LBL_ILLUM_THREADS", None)
+        else:
+            os.environ["LBL_ILLUM_THREADS"] = saved_env
+        numba.set_num_threads(saved_numba)
     best = max(runs, key=lambda r: r["rays_per_second"])
-    return {**best, "threads": thread_count(), "all_wall_seconds": [r["wall_seconds"] for r in runs],
+    return {**best, "threads": threads or thread_count(), "all_wall_seconds": [r["wall_seconds"] for r in runs],
             "all_rays_per_second": [r["rays_per_second"] for r in runs]}
 
 
@@ -341,20 +362,29 @@ def print_report(report: dict) -> None:
     print("   (cProfile sees the main thread only: embree calls made on the tracer's thread pool")
     print("    appear as the time raycast.py _run spends waiting for the pool.)")
     print(line)
+    one = report["one_core"]
+    print("5. CORES  the engine on one thread (numba and ray casting) against all")
+    print(f"   1 thread: {one['seconds']:.2f} s, {fmt_rate(one['rays_per_second'])};  "
+          f"{eng['threads']} threads: {eng['seconds']:.2f} s;  speed-up {report['speedup']:.2f}x")
+    print(line)
+    print(f"engine: {eng['rays']:,d} rays, {sum(eng['records']):,d} records in {eng['seconds']:.2f} s; "
+          f"ratio to raw embree {summ['ratio']:.3f}; speed-up 1 -> {eng['threads']} cores {report['speedup']:.2f}x")
 
 
 def main(argv=None) -> int:
     args = parse_args(argv)
     scene, points, normals = load_inputs(args.scene, args.points)
-    options = scene.options
+    options = scene.options.with_preset(args.preset) if args.preset else scene.options
     warmup = warm_up(scene, points, normals, options)
     engine = bench_engine(scene, points, normals, options, args.repeat)
+    one_core = bench_engine(scene, points, normals, options, args.repeat, threads=1)
     raw = bench_embree(scene.triangles, points, min(engine["rays"], MAX_RAW_RAYS), args.repeat)
     report = {
         "scene": display_path(args.scene), "points": display_path(args.points), "n_points": int(len(points)),
         "options": options.as_dict(), "repeat": args.repeat, "python": sys.version.split()[0],
         "numpy": np.__version__, "warmup_seconds": warmup,
-        "engine": engine, "embree": raw, "summary": summarise(engine, raw),
+        "engine": engine, "one_core": one_core, "speedup": one_core["seconds"] / engine["seconds"],
+        "embree": raw, "summary": summarise(engine, raw),
         "profile": profile_engine(scene, points, normals, options),
     }
     print_report(report)
