@@ -1,4 +1,5 @@
-"""Command line: ``lbl-illum illuminance SCENE --points PTS -o OUT``.
+"""Command line: ``lbl-illum illuminance SCENE --points PTS -o OUT``, ``lbl-illum validate``
+and ``lbl-illum export radiance SCENE DIR``.
 
 The command line only parses arguments and calls the library.  Bad input ends with
 one line on standard error naming the file, line or key, exit status 2 and no
@@ -138,6 +139,25 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="folder of the reports (default docs/validation)")
     v.add_argument("--quick", action="store_true", help="the reduced version (seconds, as the test suite runs it)")
     v.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+
+    e = sub.add_parser("export", help="write the scene in another program's format",
+                       description="Write the scene in another program's format.")
+    formats = e.add_subparsers(dest="format", metavar="FORMAT", parser_class=_Parser)
+    x = formats.add_parser("radiance", help="an equivalent Radiance scene (oconv/rtrace)",
+                           description="Write an equivalent Radiance scene into DIR: materials.rad, sky.rad "
+                           "(with lbl_sky.cal), geometry.rad (large scenes: a mesh compiled by obj2mesh), the "
+                           "sensor points as points.pts, and README.txt with the oconv and rtrace commands that "
+                           "reproduce a run.  Lengths in metres; radiance = luminance / 179 per channel.",
+                           epilog="See docs/radiance-export.md for the conversions and the known differences.")
+    x.add_argument("scene", help="scene file (.toml)")
+    x.add_argument("dir", metavar="DIR", help="output folder (created; must be empty unless --force)")
+    x.add_argument("--points", metavar="PTS", help="sensor points (.pts, scene units), copied to DIR/points.pts in metres")
+    x.add_argument("--force", action="store_true", help="write into an existing non-empty DIR, replacing files "
+                   "of the same names")
+    x.add_argument("--glass", choices=("brtdfunc", "glass"), default="brtdfunc",
+                   help="a BRTDfunc with constant coefficients (default: exactly lbl-illum's angle-independent "
+                        "glass) or Radiance's glass (Fresnel angle dependence: less light at oblique angles)")
+    x.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
     return parser
 
 
@@ -215,6 +235,48 @@ def _run_illuminance(args) -> int:
     return 0
 
 
+def _run_export(args) -> int:
+    if args.format is None:
+        raise InputError("lbl-illum export: give a format (radiance)")
+    t0 = time.perf_counter()
+    from tqdm import tqdm
+
+    from .radiance import export_radiance
+    from .scene import load_scene
+    from .sensors import read_points
+
+    out = Path(args.dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{args.dir}: exists and is not a folder")
+    if out.is_dir() and any(out.iterdir()) and not args.force:
+        raise InputError(f"{args.dir}: folder is not empty (use --force to write into it)")
+    if not out.resolve().parent.is_dir():
+        raise InputError(f"{args.dir}: folder {out.parent} does not exist")
+    scene = load_scene(args.scene)
+    points = normals = None
+    if args.points:
+        points, normals = read_points(args.points, scene.unit_scale)
+    if not args.quiet:
+        for warning in scene.warnings:
+            print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+    bar = tqdm(total=None, unit="step", delay=1.0, file=sys.stderr, disable=True if args.quiet else None,
+               leave=False, dynamic_ncols=True, desc="export radiance")
+
+    def step(text):
+        bar.set_postfix_str(text, refresh=False)
+        bar.update(1)
+
+    try:
+        ex = export_radiance(scene, out, points, normals, glass=args.glass, progress=step)
+    finally:
+        bar.close()
+    if not args.quiet:
+        shape = "mesh" if ex.mesh else "polygons"
+        print(f"lbl-illum: export radiance: {len(ex.files)} files, {ex.triangles:,} triangles ({shape}), "
+              f"{ex.spheres} spheres in {time.perf_counter() - t0:.2f} s -> {args.dir}", file=sys.stderr)
+    return 0
+
+
 def _run_validate(args) -> int:
     from tqdm import tqdm
 
@@ -266,6 +328,8 @@ def main(argv=None) -> int:
             return _run_illuminance(args)
         if args.command == "validate":
             return _run_validate(args)
+        if args.command == "export":
+            return _run_export(args)
         raise InputError(f"lbl-illum: unknown command {args.command!r}")
     except InputError as exc:
         print(f"lbl-illum: error: {exc}", file=sys.stderr)

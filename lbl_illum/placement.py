@@ -68,33 +68,54 @@ _cell_keys_kernels = serial_and_parallel(_cell_keys)
 
 
 @njit(cache=True)
-def _nearest_in_runs(order, key, off_centre):
-    picks = np.empty(order.shape[0], np.int64)
-    n = 0
-    j = 0
-    while j < order.shape[0]:
-        k = key[order[j]]
-        best = order[j]
-        j += 1
-        while j < order.shape[0] and key[order[j]] == k:
-            if off_centre[order[j]] < off_centre[best]:
-                best = order[j]
-            j += 1
-        picks[n] = best
-        n += 1
-    return picks[:n]
+def _nearest_per_key(key, off_centre):
+    """For each distinct key, the query nearest its cell's centre (the lowest index among
+    ties); returned in ascending key order.  One pass through an open-addressing hash
+    table, then a sort of the distinct keys only."""
+    n = key.shape[0]
+    size = 16
+    while size < 2 * n:
+        size *= 2
+    mask = size - 1
+    slot_key = np.empty(size, np.int64)
+    slot_best = np.full(size, -1, np.int64)
+    distinct = 0
+    for q in range(n):
+        h = (key[q] * np.int64(-7046029254386353131)) >> np.int64(17)
+        s = h & mask
+        while True:
+            b = slot_best[s]
+            if b < 0:
+                slot_key[s] = key[q]
+                slot_best[s] = q
+                distinct += 1
+                break
+            if slot_key[s] == key[q]:
+                if off_centre[q] < off_centre[b]:
+                    slot_best[s] = q
+                break
+            s = (s + 1) & mask
+    keys = np.empty(distinct, np.int64)
+    best = np.empty(distinct, np.int64)
+    m = 0
+    for s in range(size):
+        if slot_best[s] >= 0:
+            keys[m] = slot_key[s]
+            best[m] = slot_best[s]
+            m += 1
+    return best[np.argsort(keys)]
 
 
 def pick_per_cell(P: np.ndarray, N: np.ndarray, band: np.ndarray, cell: float) -> np.ndarray:
     """Indices of one query per cell (side ``cell`` · 2^band) and normal direction.
 
     Cells are hashed to one 64-bit key; a collision only merges two cells for one pass.
-    Ties in distance to the centre keep the query that sorts first by key.
+    Ties in distance to the centre keep the query with the lowest index.  The picks
+    come in ascending key order.
     """
     n = len(P)
     key = np.empty(n, np.int64)
     off_centre = np.empty(n, np.float64)
     kernel = _cell_keys_kernels[n >= PARALLEL_MIN]
     kernel(np.ascontiguousarray(P), np.ascontiguousarray(N), band, float(cell), key, off_centre)
-    order = np.argsort(key, kind="stable")
-    return _nearest_in_runs(order, key, off_centre)
+    return _nearest_per_key(key, off_centre)
