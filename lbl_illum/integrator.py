@@ -211,6 +211,10 @@ class Integrator:
         self.portals = TriangleSampler(scene.triangles, portal_ids) if len(portal_ids) else None
         self._portal_index = np.full(len(scene.triangles), -1, np.int64)
         self._portal_index[portal_ids] = np.arange(len(portal_ids))
+        used = np.unique(scene.triangles.material)
+        specular = np.isin(self.materials.kind[used], (MIRROR, GLASS)) & (self.materials.reflectance[used].max(axis=1) > 0)
+        #: some surface reflects specularly (a mirror, or glass with reflectance)
+        self._reflects = bool(specular.any())
         self.fingerprint = scene_fingerprint(scene, self.options)
         self.progress = progress
         B = self.options.bounces
@@ -234,7 +238,10 @@ class Integrator:
         """Whether records of level k can be non-zero (else they are never made)."""
         sky_light = not self.sky.is_dark
         if k == self.options.bounces:
-            return sky_light or self.options.ambient > 0
+            # at the bounce limit a record sees the sky, the ambient value, and the sun or
+            # light surfaces by specular reflection (a mirror, the outside of a pane)
+            reflected_light = not self.direct.is_dark and self._reflects
+            return sky_light or self.options.ambient > 0 or reflected_light
         return sky_light or not self.direct.is_dark or self.options.ambient > 0
 
     def _new_cache(self, points) -> IrradianceCache:

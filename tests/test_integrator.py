@@ -247,3 +247,26 @@ def test_records_traced_in_blocks_give_the_same_records_and_comparable_values(sp
     ref = upper_half_reference(normals[up])
     for run in (whole, blocks):
         assert np.abs(run.illuminance[up] / ref - 1.0).mean() < 0.01
+
+
+def test_light_seen_in_a_mirror_counts_at_the_bounce_limit_without_a_sky():
+    """A 1 m square light 1 m above a sensor's height, beside a mirror (ρ = 0.9) that the
+    sensor faces; no sky, bounces = 0.  The light's mirror image gives
+    E = ρ L ∫ cos θ_r cos θ_l / d² dA, integrated here by the midpoint rule."""
+    light = {"shape": "polygon", "material": "lamp",
+             "vertices": [[-0.5, -0.5, 2], [0.5, -0.5, 2], [0.5, 0.5, 2], [-0.5, 0.5, 2]]}
+    mirror = {"shape": "polygon", "material": "mirror",
+              "vertices": [[1, -5, -5], [1, 5, -5], [1, 5, 5], [1, -5, 5]]}
+    scene = make_scene([light, mirror], {"lamp": {"type": "light", "luminance": 1000.0},
+                                         "mirror": {"type": "mirror", "reflectance": 0.9}},
+                       sky={"type": "none"}, settings={"bounces": 0, "samples": 16384})
+    P, N = np.array([[0.5, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]])
+    n = 400
+    c = (np.arange(n) + 0.5) / n - 0.5
+    X, Y = np.meshgrid(2.0 + c, c)                       # the image lies at 1.5 < x < 2.5
+    dx, dy, dz = X - 0.5, Y, 1.0
+    d2 = dx * dx + dy * dy + dz * dz
+    exact = 0.9 * 1000.0 * np.sum(dx * dz / d2 ** 2) / n ** 2
+    result = compute_illuminance(scene, P, N)
+    assert result.direct[0, 0] == 0.0                    # the light itself faces away
+    assert result.indirect[0, 0] == pytest.approx(exact, rel=0.05)
