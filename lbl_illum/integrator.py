@@ -103,6 +103,28 @@ def _add_hit_light(owner, weight, E_hit, known, ray, mis, ray_L):
                 ray_L[r, c] += v * scale
 
 
+@njit(cache=True)
+def _compact(keep, todo, P, N, band):
+    """The entries of the uncovered queries' arrays where ``keep`` is true, in one pass."""
+    m = 0
+    for i in range(keep.shape[0]):
+        m += keep[i]
+    todo2 = np.empty(m, todo.dtype)
+    P2 = np.empty((m, 3))
+    N2 = np.empty((m, 3))
+    band2 = np.empty(m, band.dtype)
+    j = 0
+    for i in range(keep.shape[0]):
+        if keep[i]:
+            todo2[j] = todo[i]
+            band2[j] = band[i]
+            for c in range(3):
+                P2[j, c] = P[i, c]
+                N2[j, c] = N[i, c]
+            j += 1
+    return todo2, P2, N2, band2
+
+
 @dataclass
 class RunStats:
     """What a calculation did."""
@@ -211,6 +233,9 @@ class Integrator:
         self.portals = TriangleSampler(scene.triangles, portal_ids) if len(portal_ids) else None
         self._portal_index = np.full(len(scene.triangles), -1, np.int64)
         self._portal_index[portal_ids] = np.arange(len(portal_ids))
+        #: per material: reflects diffusely (ends a path at a diffuse level), and ρ/π
+        self._diffuse_reflector = (self.materials.kind == DIFFUSE) & (self.materials.reflectance.max(axis=1) > 0.0)
+        self._rho_over_pi = self.materials.reflectance / np.pi
         used = np.unique(scene.triangles.material)
         specular = np.isin(self.materials.kind[used], (MIRROR, GLASS)) & (self.materials.reflectance[used].max(axis=1) > 0)
         #: some surface reflects specularly (a mirror, or glass with reflectance)
@@ -296,7 +321,8 @@ class Integrator:
         ray = np.arange(n)
         o = np.asarray(origins, np.float64)
         d = np.asarray(directions, np.float64)
-        through = np.ones((n, 3)) if through is None else np.array(through, np.float64)
+        unit = through is None          # every throughput is 1 until a specular event
+        through = np.ones((n, 3)) if unit else np.array(through, np.float64)
         mis_weight = np.ones(n)
         reflected = np.zeros(n, bool)
         out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
@@ -320,13 +346,14 @@ class Integrator:
             mat = self.scene.triangles.material[hits.prim[hit]]
             kind = mats.kind[mat]
             # diffuse surfaces end the path
-            dif = np.flatnonzero((kind == DIFFUSE) & (mats.reflectance[mat].max(axis=1) > 0.0))
+            dif = np.flatnonzero(self._diffuse_reflector[mat])
             if len(dif):
                 out["ray"].append(ray[hit[dif]])
                 out["P"].append(P[dif])
                 out["Ns"].append(Ns[dif])
                 out["Ng"].append(Ng[dif])
-                out["weight"].append(through[hit[dif]] * mats.reflectance[mat[dif]] / np.pi)
+                weight = self._rho_over_pi[mat[dif]]
+                out["weight"].append(weight if unit else through[hit[dif]] * weight)
             lit = np.flatnonzero((kind == LIGHT) & reflected[hit])
             if len(lit):
                 radiance[ray[hit[lit]]] += through[hit[lit]] * mats.luminance[mat[lit]]
@@ -360,6 +387,7 @@ class Integrator:
                     sel = s_hit[through_portal]
                     mis_weight[ray[sel]] = self._hemisphere_weight(normals[ray[sel]], d[sel], hits.t[sel],
                                                                    hits.prim[sel], S, n_p)
+            unit = False
             ray = ray[s_hit][alive]
             o = self.tracer.offset(P[spec][alive], side[alive])
             d = new_d[alive]
@@ -560,7 +588,7 @@ class Integrator:
             todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
         # the uncovered queries, compacted after every pass
-        tP, tN, tNg = P[todo], Ns[todo], Ng[todo]
+        tP, tN = P[todo], Ns[todo]
         band = distance_bands(tP, *self._roi, self.max_spacing)
         cell = 2.0 * lv.accuracy * self.max_spacing
         passes = 0
@@ -571,7 +599,7 @@ class Integrator:
             else:
                 local = pick_per_cell(tP, tN, band, cell)
             pP, pN = tP[local], tN[local]
-            R0 = self._trace_records(k, pP, pN, tNg[local], pending, lv.count)
+            R0 = self._trace_records(k, pP, pN, Ng[todo[local]], pending, lv.count)
             R = self._clamp_radius(R0, pP)
             pending.records.append(lv.add(pP, pN, R))
             stats.new_records[k] += len(local)
@@ -584,7 +612,7 @@ class Integrator:
                 idx = np.flatnonzero(keep)
                 _, _, count = fresh.lookup(tP[idx], tN[idx])
                 keep[idx[count > 0]] = False
-            todo, tP, tN, tNg, band = todo[keep], tP[keep], tN[keep], tNg[keep], band[keep]
+            todo, tP, tN, band = _compact(keep, todo, tP, tN, band)
             cell *= 0.5
             self._tick()
         return pending, None
