@@ -1,0 +1,293 @@
+"""The pure parts of validation/bench/compare_radiance.py: Pareto fronts, time at equal
+error (log-log interpolation), the ratio verdicts, parsing of ``rad``, ``lookamb`` and
+worker output, the ladders and the run table.  Nothing here runs a benchmark."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PATH = ROOT / "validation" / "bench" / "compare_radiance.py"
+
+
+def _load():
+    spec = importlib.util.spec_from_file_location("compare_radiance", PATH)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["compare_radiance"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+cr = _load()
+
+
+# -- Pareto front ---------------------------------------------------------------------
+def test_pareto_front_keeps_runs_no_faster_run_beats():
+    seconds = [1.0, 2.0, 3.0, 4.0, 5.0, 2.5]
+    errors = [0.10, 0.12, 0.05, 0.06, 0.01, 0.05]
+    # 2.0 s is beaten by 1.0 s; 3.0 s ties the error of 2.5 s, which is faster; 4.0 s is beaten
+    assert cr.pareto_front(seconds, errors) == [0, 5, 4]
+
+
+def test_pareto_front_drops_missing_and_non_finite():
+    seconds = [1.0, None, 2.0, math.nan, 3.0]
+    errors = [0.1, 0.01, math.inf, 0.001, 0.05]
+    assert cr.pareto_front(seconds, errors) == [0, 4]
+    assert cr.pareto_front([], []) == []
+
+
+# -- time at equal error ----------------------------------------------------------------
+def test_time_at_error_is_exact_for_a_power_law():
+    """On a front lying on t = c e^-2 the log-log interpolation returns c e^-2 exactly."""
+    c = 0.5
+    errs = [0.08, 0.03, 0.011, 0.004]
+    front = [(c * e ** -2, e) for e in errs]
+    for level in (0.05, 0.02, 0.01, 0.005, 0.03):
+        seconds, kind = cr.time_at_error(front, level)
+        assert kind == "interpolated"
+        assert seconds == pytest.approx(c * level ** -2, rel=1e-12)
+
+
+def test_time_at_error_linear_in_log_log_between_two_runs():
+    front = [(1.0, 0.04), (16.0, 0.01)]       # log t rises by log 16 over log e falling by log 4
+    seconds, kind = cr.time_at_error(front, 0.02)
+    assert kind == "interpolated"
+    assert seconds == pytest.approx(4.0, rel=1e-12)   # halfway in log e -> halfway in log t
+
+
+def test_time_at_error_bounds_and_not_reached():
+    front = [(2.0, 0.03), (10.0, 0.012)]
+    assert cr.time_at_error(front, 0.05) == (2.0, "at most")
+    assert cr.time_at_error(front, 0.01) == (None, "not reached")
+    assert cr.time_at_error(front, 0.012) == (10.0, "interpolated")
+    assert cr.time_at_error(front, 0.03) == (2.0, "interpolated")
+    assert cr.time_at_error([], 0.02) == (None, "no runs")
+    assert cr.time_at_error([(3.0, 0.02)], 0.02) == (3.0, "interpolated")
+
+
+# -- ratio at equal error ----------------------------------------------------------------
+def test_compare_at_interpolated_ratio_and_verdict():
+    ours = [(1.0, 0.04), (16.0, 0.01)]
+    theirs = [(10.0, 0.04), (160.0, 0.01)]
+    c = cr.compare_at(ours, theirs, 0.02)
+    assert c["ratio"] == pytest.approx(0.1) and c["relation"] == "=" and c["verdict"] == "met"
+    c = cr.compare_at(theirs, ours, 0.02)
+    assert c["ratio"] == pytest.approx(10.0) and c["verdict"] == "missed"
+
+
+def test_compare_at_bounds_not_reached_and_undetermined():
+    fast_and_good = [(1.0, 0.004)]                   # already within every level
+    radiance = [(10.0, 0.06), (100.0, 0.015)]
+    c = cr.compare_at(fast_and_good, radiance, 0.02)
+    assert c["relation"] == "≤" and c["ratio"] < 0.5 and c["verdict"] == "met"
+    assert cr.ratio_text(c).startswith("≤ ")
+    c = cr.compare_at(fast_and_good, radiance, 0.01)          # Radiance never gets to 1 %
+    assert c["verdict"] == "n/a" and c["ratio"] is None
+    assert cr.ratio_text(c) == "Radiance not reached"
+    c = cr.compare_at([(1.0, 0.05)], radiance, 0.02)          # we never get to 2 %
+    assert c["verdict"] == "missed" and cr.ratio_text(c) == "lbl_illum not reached"
+    c = cr.compare_at(radiance, [(1.0, 0.004)], 0.02)         # Radiance's time an upper bound
+    assert c["relation"] == "≥" and c["verdict"] == "missed"
+    c = cr.compare_at([(1.0, 0.004)], [(5.0, 0.003)], 0.02)   # both bounds: nothing decided
+    assert c["relation"] is None and c["verdict"] == "undetermined"
+    assert cr.short_ratio(c) == "?"
+
+
+# -- parsing ----------------------------------------------------------------------------
+RAD_OUTPUT = """\
+DETAIL=medium
+QUALITY=MEDIUM
+ZONE= I 0 4 0 6 0 3
+\toconv materials.rad sky.rad geometry.rad > scene.oct
+\trpict -vtv -vp 3.8 3 1.5 -vd -4 0 0 -vu 0 0 1 -vh 45 -vv 45 -x 1024 -y 1024 -dp 512 -ar 44 -ms 0.11 \
+-ds .3 -dt .07 -dc .7 -dr 1 -ss 1 -st .1 -ab 2 -aa .1 -ad 1536 -as 392 -av 0.01 0.01 0.01 -lr 8 -lw 1e-4 \
+-ps 6 -pt .08 scene.oct > scene_X.unf
+\tpfilt -r .6 -x /2 -y /2 scene_X.unf > scene_X.hdr
+"""
+
+
+def test_rad_rtrace_options_keeps_rendering_options_only():
+    args = cr.rad_rtrace_options(RAD_OUTPUT)
+    assert args == ["-dp", "512", "-ar", "44", "-ms", "0.11", "-ds", ".3", "-dt", ".07", "-dc", ".7", "-dr", "1",
+                    "-ss", "1", "-st", ".1", "-ab", "2", "-aa", ".1", "-ad", "1536", "-as", "392",
+                    "-av", "0.01", "0.01", "0.01", "-lr", "8", "-lw", "1e-4"]
+
+
+def test_rad_rtrace_options_errors():
+    with pytest.raises(ValueError, match="no rpict"):
+        cr.rad_rtrace_options("QUALITY=LOW\n\toconv a.rad > a.oct\n")
+    with pytest.raises(ValueError, match="unknown rpict option '-zz'"):
+        cr.rad_rtrace_options("\trpict -zz 3 -ab 1 scene.oct > x.unf\n")
+    with pytest.raises(ValueError, match="lacks"):
+        cr.rad_rtrace_options("\trpict -ab 1 -av 0.1 0.1 scene.oct\n")
+
+
+def test_rif_text_names_zone_and_quality():
+    text = cr.rif_text((0, 4, 0, 6, 0, 3), ["a.rad", "b.rad"], "scene.oct", "HIGH", 5)
+    assert "ZONE= I 0 4 0 6 0 3\n" in text and "scene= a.rad b.rad\n" in text
+    assert "QUALITY= HIGH\n" in text and "INDIRECT= 5\n" in text and "OCTREE= scene.oct\n" in text
+
+
+def test_count_ambient_records_and_worker_output():
+    assert cr.count_ambient_records("1 2 3\n\n4 5 6\n   \n7 8 9\n") == 3
+    assert cr.count_ambient_records("") == 0
+    doc = cr.parse_worker_output('warning: x\n{"seconds": 1.5, "rays": 10, "records": [3, 4]}\n\n')
+    assert doc["seconds"] == 1.5 and doc["records"] == [3, 4]
+    with pytest.raises(ValueError, match="lacks rays"):
+        cr.parse_worker_output('{"seconds": 1, "records": []}')
+    with pytest.raises(ValueError, match="nothing"):
+        cr.parse_worker_output("\n")
+
+
+def test_parse_scenes():
+    assert cr.parse_scenes("office, furnished,office") == ["office", "furnished"]
+    with pytest.raises(ValueError, match="unknown scene 'kitchen'"):
+        cr.parse_scenes("office,kitchen")
+    with pytest.raises(ValueError, match="no scene"):
+        cr.parse_scenes(" , ")
+
+
+# -- ladders and settings -----------------------------------------------------------------
+def test_ambient_resolution_matches_rads_rule():
+    # rad (DETAIL=medium, QUALITY=MEDIUM): ar = 32 * cube / mean zone side
+    assert cr.ambient_resolution(32, cube=6.0, zone_size=(4 + 6 + 3) / 3) == 44
+    assert cr.ambient_resolution(8, cube=1.0, zone_size=1000.0) == 1
+
+
+def test_sphere_plane_ladders_follow_one_reflection():
+    ours = cr.engine_ladder("sphere-plane")
+    assert ours and all(s.options["bounces"] == 1 for s in ours)
+    theirs = cr.radiance_ladder("sphere-plane", cube=10000.0, zone_size=2.0)
+    assert theirs and all(cr._arg(s.args, "-ab") == "1" for s in theirs)
+    assert len({s.key for s in ours + theirs}) == len(ours + theirs)
+
+
+def test_office_ladders_include_presets_and_monte_carlo():
+    ours = cr.engine_ladder("office")
+    families = {s.family for s in ours}
+    assert {"preset", "a × samples", "Monte Carlo", "paper interpolation"} <= families
+    assert len({s.key for s in ours}) == len(ours)
+    theirs = cr.radiance_ladder("office", cube=200.0, zone_size=13 / 3)
+    pure = [s for s in theirs if cr._arg(s.args, "-aa") == "0"]
+    assert pure and all("-as" not in s.args and "-af" not in s.args for s in pure)
+    assert all(cr._arg(s.args, "-lw") == cr.LIMIT_WEIGHT for s in theirs)
+
+
+def test_quick_ladders_are_tiny():
+    for kind in ("office", "furnished", "sphere-plane"):
+        assert 2 <= len(cr.engine_ladder(kind, quick=True)) <= 3
+        assert 2 <= len(cr.radiance_ladder(kind, cube=200.0, zone_size=4.0, quick=True)) + \
+            len(cr.QUICK_RAD_PRESETS if cr.RAD_PRESETS[kind] else []) <= 3
+
+
+def test_run_order_alternates_the_programs():
+    settings = cr.engine_ladder("office", quick=True) + cr.radiance_ladder("office", 200.0, 4.0, quick=True)
+    order = cr.run_order(settings)
+    assert sorted(order) == list(range(len(settings)))
+    programs = [settings[k].program for k in order]
+    assert programs[:4] == ["lbl_illum", "radiance", "lbl_illum", "radiance"]
+
+
+def test_warmup_options_are_cheap_and_of_the_same_kind():
+    full = cr.engine_options("medium")
+    warm = cr.warmup_options(full)
+    assert warm["samples"] <= 64 and warm["bounces"] <= 2 and warm["point_samples"] <= 64
+    assert warm["accuracy"] >= 0.3 and warm["interpolation"] == full["interpolation"]
+    pure = cr.warmup_options(cr.engine_options(accuracy=0.0, samples=4096))
+    assert pure["accuracy"] == 0.0 and pure["samples"] == 64
+
+
+def test_room_zone_leaves_out_the_ground():
+    room = np.array([[[0, 0, 0], [4, 0, 0], [4, 6, 3]], [[0, 6, 3], [4, 6, 0], [0, 0, 3]]], float)
+    ground = np.array([[[-100, -100, 0], [100, -100, 0], [100, 100, 0]]], float)
+    tri = SimpleNamespace(vertices=np.concatenate([room, ground]))
+    points = np.array([[0.5, 0.5, 0.8], [3.5, 5.5, 0.8]])
+    assert cr.room_zone(tri, points) == (0.0, 4.0, 0.0, 6.0, 0.0, 3.0)
+
+
+# -- the run table ------------------------------------------------------------------------------
+def test_run_table_rows_and_front_marks():
+    runs = [
+        {"program": "lbl_illum", "family": "preset", "label": "preset draft", "seconds": 1.0, "process_seconds": 3.0,
+         "maxrss_kib": 2048, "mean_error": 0.02, "max_error": 0.05, "bias": 0.01, "records": 4710, "rays": 403139},
+        {"program": "lbl_illum", "family": "preset", "label": "preset high", "seconds": 5.0, "process_seconds": 7.0,
+         "maxrss_kib": 4096, "mean_error": 0.03, "max_error": 0.05, "bias": 0.01, "records": 1, "rays": 2},
+        {"program": "radiance", "family": "-aa × -ad", "label": "-ab 8", "seconds": 2.0, "process_seconds": 2.0,
+         "maxrss_kib": 1024, "mean_error": 0.01, "max_error": 0.04, "bias": -0.002, "records": 99, "rays": None},
+        {"program": "radiance", "family": "-ab", "label": "-ab 5", "failed": True},
+    ]
+    assert cr.front_pairs(runs, "lbl_illum") == [(1.0, 0.02)]
+    assert cr.front_pairs(runs, "radiance") == [(2.0, 0.01)]
+    header, rows = cr.run_table(runs)
+    assert len(rows) == 4 and all(len(r) == len(header) for r in rows)
+    assert rows[0][header.index("mean error")] == "2.00 %"
+    assert rows[0][header.index("peak MiB")] == "2"
+    assert rows[0][header.index("front")] == "★" and rows[1][header.index("front")] == ""
+    assert rows[2][header.index("rays")] == "—" and rows[2][header.index("bias")] == "-0.20 %"
+    assert rows[3][header.index("seconds")] == "failed"
+
+
+# -- measuring a child --------------------------------------------------------------------------
+def test_run_measured_reads_the_childs_peak_memory():
+    """A child that touches 64 MiB reports a peak resident set of at least that."""
+    code = "import sys; b = bytearray(64 * 1024 * 1024); b[::4096] = b'x' * len(b[::4096]); print('ok')"
+    m = cr.run_measured([sys.executable, "-c", code], timeout=60)
+    assert m.returncode == 0 and m.stdout.strip() == b"ok"
+    assert m.maxrss_kib >= 64 * 1024
+    assert m.seconds > 0
+    bad = cr.run_measured([sys.executable, "-c", "import sys; sys.exit(3)"], timeout=60)
+    assert bad.returncode == 3
+
+
+def test_run_measured_does_not_count_this_process_memory(tmp_path):
+    """Linux adds the memory of the image an exec replaces to the child's ru_maxrss: a
+    small child of a process holding 256 MiB must still report a small peak."""
+    ballast = bytearray(256 * 1024 * 1024)
+    ballast[::4096] = b"x" * len(ballast[::4096])
+    out = tmp_path / "out.txt"
+    m = cr.run_measured([sys.executable, "-S", "-c", "print(6 * 7)"], cwd=tmp_path, stdout_path=out, timeout=60)
+    assert m.returncode == 0 and out.read_text().strip() == "42" and m.stdout == b""
+    assert m.maxrss_kib < 64 * 1024
+    del ballast
+
+
+def test_run_measured_stops_a_run_past_its_limits():
+    m = cr.run_measured([sys.executable, "-S", "-c", "import time; time.sleep(30)"], timeout=0.3)
+    assert m.returncode < 0 and m.seconds < 10 and m.stopped == "timeout"
+    assert cr.failure(m) == "stopped: over the time limit"
+    hog = "import time; b = bytearray(200 * 1024 * 1024); b[::4096] = b'x' * len(b[::4096]); time.sleep(30)"
+    m = cr.run_measured([sys.executable, "-S", "-c", hog], timeout=20, memory_gib=0.1)
+    assert m.returncode < 0 and m.seconds < 10 and m.stopped == "memory"
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pyradiance") is None, reason="needs pyradiance (Radiance programs)")
+def test_rad_presets_on_the_office(tmp_path):
+    """rad's MEDIUM options for the office: -ab INDIRECT, its -aa/-ad, and an -ar
+    from the zone and the octree's cube (32 · cube / zone for DETAIL=medium)."""
+    import subprocess
+
+    from lbl_illum import load_scene, read_points
+    from lbl_illum.radiance import export_radiance, radiance_programs
+
+    scene = load_scene(ROOT / "examples" / "office" / "scene.toml")
+    points, normals = read_points(ROOT / "examples" / "office" / "grid.pts", scene.unit_scale)
+    ex = export_radiance(scene, tmp_path / "office", points, normals, glass="brtdfunc")
+    programs = radiance_programs(ex.directory)
+    with open(ex.directory / ex.octree, "wb") as out:
+        subprocess.run(cr._program(ex.oconv_command(), programs), cwd=ex.directory, env=programs["env"],
+                       stdout=out, check=True)
+    zone = cr.room_zone(scene.triangles, points)
+    (medium,) = cr.rad_settings(programs, ex, zone, [("MEDIUM", 3)])
+    assert cr._arg(medium.args, "-ab") == "3"
+    assert cr._arg(medium.args, "-aa") is not None and cr._arg(medium.args, "-ad") is not None
+    info = subprocess.run([str(programs["bin"]["getinfo"]), "-d", ex.octree], cwd=ex.directory,
+                          env=programs["env"], capture_output=True, text=True, check=True).stdout
+    cube = float(info.split()[-1])
+    assert int(cr._arg(medium.args, "-ar")) == cr.ambient_resolution(32, cube, 13 / 3)
