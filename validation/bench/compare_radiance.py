@@ -138,7 +138,7 @@ LIMIT_WEIGHT = "1e-5"
 ZONE_MARGIN = 3.0
 #: Furnished office: triangles, reference seeds, bounces and time budget [min].
 FURNISHED_TRIANGLES = 1_000_000
-REFERENCE_SEEDS = 8
+REFERENCE_SEEDS = 16
 REFERENCE_BOUNCES = 12
 REFERENCE_MINUTES = 15.0
 REFERENCE_SAMPLES = (1024, 16384)          # bounds on the samples per seed
