@@ -7,9 +7,10 @@ spacing limits.  Level k holds the values that serve queries made after k diffus
 reflections; a value computed after k bounces never stands in for one after fewer.
 
 Records and octree nodes are growable structure-of-arrays buffers; the compiled
-kernels of :mod:`lbl_illum.octree` insert and look them up.  A cache is plain data:
-it can be saved and loaded, and the same records always give the same answers,
-whatever order they were made in.
+kernels of :mod:`lbl_illum.octree` insert them, lay them out for lookups and look
+them up.  A cache is plain data: it can be saved and loaded, and a lookup's answer
+depends only on its query and the records, not on the other queries of the batch
+or the number of threads.
 
 File format (``.npz``, version 1): arrays ``L{k}_P``, ``L{k}_N``, ``L{k}_E``,
 ``L{k}_R``, ``L{k}_Gr``, ``L{k}_Gt`` (rotational and translational gradients) per level and a ``header`` holding JSON: ``format``, ``version``,
@@ -26,6 +27,7 @@ import json
 import os
 from pathlib import Path
 
+import numba
 import numpy as np
 
 from . import octree
@@ -43,41 +45,77 @@ class LevelRecords:
 
     accuracy : the level's ``a`` (0: no interpolation, records answer only their own query)
     center, half : the root cube [m]
+    capacity : records to allocate room for
+
+    Record arrays, indexed by record and growable (rows past ``count`` are spare
+    capacity): ``P`` (n, 3) float64 [m], ``N`` (n, 3) float32, ``R`` (n,) float32 [m],
+    fixed once added; ``E`` (n, 3) float32 [lux], ``Gr`` (n, 3, 3) float32 [lux/rad] and
+    ``Gt`` (n, 3, 3) float32 [lux/m], writable views of one (n, 7, 3) block (write into
+    them, or use :meth:`set_values`; the next lookup uses the new values); and
+    ``record_node`` (n,) int32, the octree node holding each record.  Octree nodes:
+    ``node_center`` (m, 3) [m], ``node_half`` (m,) [m], ``node_child`` (m, 8) int32.
+    Lookups use the :class:`octree.Layout` made by :meth:`freeze`, redone after insertions.
+
+    Memory per record: 128 bytes in the record arrays, 44 in the lookup layout (P, N, R
+    in layout order and the permutation), about 3.4 for its boxes and 64 per octree node
+    (a node per 12 to 40 records): about 180 bytes, plus the spare capacity (arrays
+    grow by half when full).  :meth:`nbytes` lists them.
     """
+
+    #: Below this many queries a lookup runs on one thread: waking numba's thread pool
+    #: costs milliseconds on a busy machine, about as long as 2,000 queries take.
+    PARALLEL_MIN_QUERIES = 4096
+    #: From this many queries on, they are visited in Morton order (in packets of
+    #: neighbours, see :mod:`lbl_illum.octree`); the sort costs about 20 ns a query.
+    SORT_MIN_QUERIES = 1024
 
     def __init__(self, accuracy: float, center: np.ndarray, half: float, capacity: int = 1024):
         self.accuracy = float(accuracy)
         self.count = 0
+        capacity = max(1, int(capacity))
         self.P = np.zeros((capacity, 3), np.float64)
         self.N = np.zeros((capacity, 3), np.float32)
-        self.E = np.zeros((capacity, 3), np.float32)
         self.R = np.zeros(capacity, np.float32)
-        self.Gr = np.zeros((capacity, 3, 3), np.float32)   # rotational gradient [lux/rad]
-        self.Gt = np.zeros((capacity, 3, 3), np.float32)   # translational gradient [lux/m]
-        self._next = np.full(capacity, -1, np.int32)
+        self._values = np.zeros((capacity, 7, 3), np.float32)   # E, Gr (3 rows), Gt (3 rows) per record
+        self.record_node = np.full(capacity, -1, np.int32)
         self._tree_version = 0
         self._frozen = None
-        self._reset_tree(np.asarray(center, np.float64), float(half), 256)
+        self._reset_tree(np.asarray(center, np.float64), float(half), 64)
 
     # -- storage ---------------------------------------------------------------
     def _reset_tree(self, center, half, capacity):
         self.node_center = np.zeros((capacity, 3), np.float64)
         self.node_half = np.zeros(capacity, np.float64)
         self.node_child = np.full((capacity, 8), -1, np.int32)
-        self.node_first = np.full(capacity, -1, np.int32)
-        self.node_lo = np.full((capacity, 3), np.inf)
-        self.node_hi = np.full((capacity, 3), -np.inf)
         self.node_center[0] = center
         self.node_half[0] = half
         self.n_nodes = 1
         self._tree_version += 1
+        self._frozen = None
+
+    # E, Gr and Gt are views of one (capacity, 7, 3) block, so that a lookup reads a
+    # record's value and gradients from 84 adjacent bytes
+    @property
+    def E(self) -> np.ndarray:
+        """(capacity, 3) float32 irradiance [lux] (a writable view)."""
+        return self._values[:, 0, :]
+
+    @property
+    def Gr(self) -> np.ndarray:
+        """(capacity, 3, 3) float32 rotational gradient [lux/rad], one row per channel (a writable view)."""
+        return self._values[:, 1:4, :]
+
+    @property
+    def Gt(self) -> np.ndarray:
+        """(capacity, 3, 3) float32 translational gradient [lux/m], one row per channel (a writable view)."""
+        return self._values[:, 4:7, :]
 
     def _grow_records(self, needed):
         cap = len(self.R)
         if needed <= cap:
             return
-        new = max(needed, 2 * cap)
-        for name in ("P", "N", "E", "R", "Gr", "Gt", "_next"):
+        new = max(needed, cap + cap // 2)
+        for name in ("P", "N", "R", "_values", "record_node"):
             old = getattr(self, name)
             arr = np.zeros((new,) + old.shape[1:], old.dtype)
             arr[: self.count] = old[: self.count]
@@ -85,9 +123,8 @@ class LevelRecords:
 
     def _grow_nodes(self):
         cap = len(self.node_half)
-        new = 2 * cap
-        for name, fill in (("node_center", 0), ("node_half", 0), ("node_child", -1), ("node_first", -1),
-                           ("node_lo", np.inf), ("node_hi", -np.inf)):
+        new = cap + cap // 2
+        for name, fill in (("node_center", 0), ("node_half", 0), ("node_child", -1)):
             old = getattr(self, name)
             arr = np.full((new,) + old.shape[1:], fill, old.dtype)
             arr[:cap] = old
@@ -99,17 +136,16 @@ class LevelRecords:
 
     def _rebuild(self, center, half):
         """Re-insert every record under a new root cube."""
-        self._reset_tree(center, half, max(256, self.n_nodes))
-        self._next[: self.count] = -1
+        self._reset_tree(center, half, max(64, self.n_nodes))
         self._insert(0, self.count)
 
     def _insert(self, start, stop):
         self._tree_version += 1
+        self._frozen = None                   # the old layout is stale: free it now
         while start < stop:
             self.n_nodes, start = octree.insert_records(
-                start, stop, self.P, self.R, self.accuracy if self.accuracy > 0 else 1.0, self._next,
-                self.node_center, self.node_half, self.node_child, self.node_first, self.node_lo, self.node_hi,
-                self.n_nodes)
+                start, stop, self.P, self.R, self.accuracy if self.accuracy > 0 else 1.0, self.record_node,
+                self.node_center, self.node_half, self.node_child, self.n_nodes)
             if start < stop:
                 self._grow_nodes()
 
@@ -136,13 +172,26 @@ class LevelRecords:
                 self._insert(start, self.count)
         return np.arange(start, start + k)
 
+    def set_values(self, indices, E, Gr=None, Gt=None) -> None:
+        """Set the irradiance (and, if given, the gradients) of records ``indices``.
+
+        The same as writing ``E[indices]``, ``Gr[indices]``, ``Gt[indices]``: lookups
+        read the values through the layout's permutation, so no layout is rebuilt.
+        """
+        self.E[indices] = E
+        if Gr is not None:
+            self.Gr[indices] = Gr
+        if Gt is not None:
+            self.Gt[indices] = Gt
+
     # -- queries -----------------------------------------------------------------
     def lookup(self, P, N, gradients: bool = False):
         """Interpolated irradiance at queries (Eq. 5); with ``gradients`` each record's
         value is first extrapolated to the query by its gradients (Ward & Heckbert 1992).
 
         Returns ``(E, weight_sum, count)``: (n, 3) float64, (n,) float64, (n,) int32;
-        ``count == 0`` marks a query no record covers.
+        ``count == 0`` marks a query no record covers.  Each answer depends only on its
+        own query and the records, not on the other queries or the thread count.
         """
         P = np.ascontiguousarray(P, np.float64).reshape(-1, 3)
         N = np.ascontiguousarray(N, np.float64).reshape(-1, 3)
@@ -151,26 +200,39 @@ class LevelRecords:
         out_w = np.zeros(n)
         out_n = np.zeros(n, np.int32)
         if n and self.count and self.accuracy > 0:
-            perm, start, count, box, packed = self._frozen_tree()
-            octree.lookup(P, N, packed, self.E[perm], self.Gr[perm], self.Gt[perm], gradients, start, count,
-                          self.node_child, box, self.accuracy, out_E, out_w, out_n)
+            layout = self.freeze()
+            if n >= self.SORT_MIN_QUERIES:
+                order = octree.query_order(P, self.node_center[0], self.node_half[0])
+            else:
+                order = np.arange(n)
+            parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
+            octree.lookup(P, N, order, layout, self._values, gradients, self.accuracy, out_E, out_w, out_n, parallel)
         return out_E, out_w, out_n
 
-    def _frozen_tree(self):
-        """The lookup layout of :func:`octree.freeze`, rebuilt after any insertion."""
+    def freeze(self) -> octree.Layout:
+        """The lookup layout of :func:`octree.freeze`, rebuilt only after insertions."""
         if self._frozen is None or self._frozen[0] != self._tree_version:
-            n, m = self.count, self.n_nodes
-            perm = np.empty(n, np.int64)
-            start = np.empty(m, np.int32)
-            count = np.empty(m, np.int32)
-            box = np.empty((m, 6), np.float64)
-            packed = np.empty((n, 8), np.float64)
-            octree.freeze(m, self.node_first, self._next, self.P, self.N, self.R, self.accuracy,
-                          self.node_lo, self.node_hi, start, count, box, perm, packed)
-            self._frozen = (self._tree_version, perm, start, count, box, packed)
-        return self._frozen[1:]
+            self._frozen = None
+            layout = octree.Layout(*octree.freeze(
+                self.count, self.n_nodes, self.record_node, self.node_child, self.node_center, self.node_half,
+                self.P, self.N, self.R, self.accuracy))
+            self._frozen = (self._tree_version, layout)
+        return self._frozen[1]
+
+    def nbytes(self) -> dict:
+        """Bytes held per array (records, octree nodes, lookup layout), by name, counted
+        as allocated (spare capacity included)."""
+        out = {name: getattr(self, name).nbytes for name in
+               ("P", "N", "R", "record_node", "node_center", "node_half", "node_child")}
+        out["E, Gr, Gt"] = self._values.nbytes
+        if self._frozen is not None:
+            for name, arr in self._frozen[1]._asdict().items():
+                if isinstance(arr, np.ndarray):
+                    out[f"layout.{name}"] = arr.nbytes
+        return out
 
     def arrays(self) -> dict:
+        """Copies of the record arrays that a cache file holds (``count`` rows each)."""
         n = self.count
         return {name: getattr(self, name)[:n].copy() for name in ("P", "N", "E", "R", "Gr", "Gt")}
 

@@ -1,5 +1,7 @@
-"""§3.3 octree: the lookup returns exactly the brute-force set S of Eq. 5 with Eq. 6's test."""
+"""§3.3 octree: the lookup returns exactly the brute-force set S of Eq. 5 with Eq. 6's test,
+whatever the order, batch and thread count of the queries."""
 
+import numba
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
@@ -7,8 +9,9 @@ from lbl_illum.cache import LevelRecords
 from lbl_illum.octree import FRONT_TOLERANCE, MIN_ERROR
 
 
-def brute_force(qP, qN, P, N, E, R, a):
-    """Eqs. 5 and 6 evaluated for every (query, record) pair with numpy."""
+def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None):
+    """Eqs. 5 and 6 evaluated for every (query, record) pair with numpy; with gradients,
+    record i contributes max(0, E_i + ∇_r E_i·(N_i × N) + ∇_t E_i·(P − P_i)) per channel."""
     d = qP[:, None, :] - P[None, :, :]
     dist = np.linalg.norm(d, axis=2)
     ndot = np.minimum(qN @ N.T.astype(np.float64), 1.0)
@@ -17,7 +20,12 @@ def brute_force(qP, qN, P, N, E, R, a):
     inside = (err < a) & (front >= -FRONT_TOLERANCE * R[None, :])
     w = np.where(inside, 1.0 / np.maximum(err, MIN_ERROR), 0.0)
     sw = w.sum(axis=1)
-    Ei = (w @ E.astype(np.float64)) / np.where(sw > 0, sw, 1.0)[:, None]
+    Eq = np.broadcast_to(E.astype(np.float64)[None], d.shape)
+    if Gr is not None:
+        cross = np.cross(N.astype(np.float64)[None, :, :], qN[:, None, :])        # N_i × N
+        Eq = np.maximum(0.0, Eq + np.einsum("rck,qrk->qrc", Gr.astype(np.float64), cross)
+                        + np.einsum("rck,qrk->qrc", Gt.astype(np.float64), d))
+    Ei = np.einsum("qr,qrc->qc", w, Eq) / np.where(sw > 0, sw, 1.0)[:, None]
     return inside.sum(axis=1), sw, Ei
 
 
@@ -56,21 +64,129 @@ def test_octree_lookup_equals_brute_force(seed, n_rec, a, spread):
     # in sqrt(1 - N·N_i) (float32 normals, different summation order), hence 1e-4
     assert np.allclose(w_oct, sw, rtol=1e-4)
     assert np.allclose(E_oct, Ei, rtol=1e-4, atol=1e-6)
+    # gradients set after the lookup (as the integrator does) are used by the next one
+    Gr = rng.normal(scale=200.0, size=(n_rec, 3, 3)).astype(np.float32)
+    Gt = (rng.normal(scale=200.0, size=(n_rec, 3, 3)) / R[:, None, None]).astype(np.float32)
+    lv.Gr[:n_rec], lv.Gt[:n_rec] = Gr, Gt
+    _, _, Eg = brute_force(qP, qN, P, N, E, R, a, Gr, Gt)
+    E_oct, _, _ = lv.lookup(qP, qN, gradients=True)
+    assert np.allclose(E_oct, Eg, rtol=1e-4, atol=1e-3)
+
+
+def _floor_and_walls(rng, n):
+    """Records of a room: a floor and two walls, radii over a decade, values and gradients."""
+    P = rng.uniform(0.0, 4.0, (n, 3))
+    N = np.zeros((n, 3))
+    side = rng.integers(0, 3, n)
+    for k in range(3):
+        P[side == k, k] = 0.0
+        N[side == k, k] = 1.0
+    R = (0.1 * 10 ** rng.uniform(0, 1, n)).astype(np.float32)
+    E = rng.uniform(0, 1000, (n, 3)).astype(np.float32)
+    Gr = rng.normal(scale=100.0, size=(n, 3, 3)).astype(np.float32)
+    Gt = rng.normal(scale=100.0, size=(n, 3, 3)).astype(np.float32)
+    return P, N.astype(np.float32), R, E, Gr, Gt
+
+
+def _queries_on(rng, P, N, n):
+    """Queries near record positions, on their surfaces, with their normals."""
+    pick = rng.integers(0, len(P), n)
+    qN = N[pick].astype(np.float64)
+    qP = P[pick] + rng.normal(scale=0.05, size=(n, 3)) * (1.0 - qN)
+    return qP, qN
+
+
+def test_large_batches_use_the_sorted_packet_search_and_stay_exact():
+    """20,000 records and 6,000 queries (sorted into packets, on every thread) against
+    brute force on a sample of the queries."""
+    rng = np.random.default_rng(11)
+    P, N, R, E, Gr, Gt = _floor_and_walls(rng, 20000)
+    lv = LevelRecords(0.2, center=np.full(3, 2.0), half=2.1)
+    for s in range(0, len(P), 5000):
+        lv.add(P[s:s + 5000], N[s:s + 5000], R[s:s + 5000], E[s:s + 5000], Gr[s:s + 5000], Gt[s:s + 5000])
+    qP, qN = _queries_on(rng, P, N, 6000)
+    E_oct, w_oct, n_oct = lv.lookup(qP, qN, gradients=True)
+    assert n_oct.mean() > 5                                # the queries are covered
+    sample = rng.choice(len(qP), 200, replace=False)
+    for part in np.array_split(sample, 4):
+        count, sw, Ei = brute_force(qP[part], qN[part], P, N, E, R, 0.2, Gr, Gt)
+        assert np.array_equal(n_oct[part], count)
+        assert np.allclose(w_oct[part], sw, rtol=1e-4)
+        assert np.allclose(E_oct[part], Ei, rtol=1e-4, atol=1e-3)
+
+
+def test_answers_do_not_depend_on_order_batch_or_threads():
+    """Bit for bit: the whole batch, the batch shuffled, in calls of 100 queries (unsorted,
+    one thread) and one at a time, on one and on all threads."""
+    rng = np.random.default_rng(5)
+    P, N, R, E, Gr, Gt = _floor_and_walls(rng, 8000)
+    lv = LevelRecords(0.3, center=np.full(3, 2.0), half=2.1)
+    lv.add(P, N, R, E, Gr, Gt)
+    qP, qN = _queries_on(rng, P, N, 5000)
+    for gradients in (False, True):
+        ref = lv.lookup(qP, qN, gradients=gradients)
+        shuffle = rng.permutation(len(qP))
+        got = lv.lookup(qP[shuffle], qN[shuffle], gradients=gradients)
+        for a, b in zip(ref, got):
+            assert np.array_equal(a[shuffle], b)
+        parts = [lv.lookup(qP[s:s + 100], qN[s:s + 100], gradients=gradients) for s in range(0, len(qP), 100)]
+        for k, a in enumerate(ref):
+            assert np.array_equal(a, np.concatenate([p[k] for p in parts]))
+        for q in rng.choice(len(qP), 20, replace=False):
+            one = lv.lookup(qP[q:q + 1], qN[q:q + 1], gradients=gradients)
+            for a, b in zip(ref, one):
+                assert np.array_equal(a[q:q + 1], b)
+        threads = numba.get_num_threads()
+        numba.set_num_threads(1)
+        try:
+            single = lv.lookup(qP, qN, gradients=gradients)
+        finally:
+            numba.set_num_threads(threads)
+        for a, b in zip(ref, single):
+            assert np.array_equal(a, b)
+
+
+def test_values_written_after_a_lookup_and_records_added_after_it_are_seen():
+    rng = np.random.default_rng(2)
+    P, N, R, E, Gr, Gt = _floor_and_walls(rng, 3000)
+    lv = LevelRecords(0.3, center=np.full(3, 2.0), half=2.1)
+    idx = lv.add(P[:2000], N[:2000], R[:2000])            # values not known yet
+    qP, qN = _queries_on(rng, P[:2000], N[:2000], 300)
+    _, _, n0 = lv.lookup(qP, qN)
+    lv.E[idx[:1000]] = E[:1000]                           # a plain write ...
+    lv.set_values(idx[1000:], E[1000:2000], Gr[1000:2000], Gt[1000:2000])   # ... and the method
+    lv.Gr[idx[:1000]], lv.Gt[idx[:1000]] = Gr[:1000], Gt[:1000]
+    for gradients in (False, True):
+        got = lv.lookup(qP, qN, gradients=gradients)
+        want = brute_force(qP, qN, P[:2000], N[:2000], E[:2000], R[:2000], 0.3,
+                           *((Gr[:2000], Gt[:2000]) if gradients else ()))
+        assert np.array_equal(got[2], n0) and np.array_equal(got[2], want[0])
+        assert np.allclose(got[0], want[2], rtol=1e-4, atol=1e-3)
+    lv.add(P[2000:], N[2000:], R[2000:], E[2000:])       # after a lookup: the layout is redone
+    got = lv.lookup(qP, qN)
+    want = brute_force(qP, qN, P, N, E, R, 0.3)
+    assert np.array_equal(got[2], want[0]) and np.allclose(got[0], want[2], rtol=1e-4, atol=1e-6)
+
+
+def test_memory_per_record_stays_below_200_bytes():
+    """Records (128 B), lookup layout (about 48 B) and octree nodes, at exact capacity."""
+    rng = np.random.default_rng(3)
+    P, N, R, E, Gr, Gt = _floor_and_walls(rng, 50000)
+    lv = LevelRecords(0.2, center=np.full(3, 2.0), half=2.1, capacity=len(P))
+    lv.add(P, N, R, E, Gr, Gt)
+    lv.freeze()
+    per_record = sum(lv.nbytes().values()) / len(P)
+    assert 170 < per_record < 200
 
 
 def test_record_sits_in_a_node_of_the_paper_size():
     lv = LevelRecords(0.1, center=np.zeros(3), half=64.0)
     lv.add(np.array([[1.0, 2.0, 3.0]]), np.array([[0, 0, 1.0]]), np.array([2.0]))
-    # walk the tree to the node holding record 0 and check 2aR < side <= 4aR
-    for node in range(lv.n_nodes):
-        if lv.node_first[node] == 0:
-            side = 2 * lv.node_half[node]
-            assert 2 * 0.1 * 2.0 < side <= 4 * 0.1 * 2.0
-            c, h = lv.node_center[node], lv.node_half[node]
-            assert np.all(np.abs(np.array([1.0, 2.0, 3.0]) - c) <= h)
-            break
-    else:
-        raise AssertionError("record not found in any node")
+    # the node holding record 0 satisfies 2aR < side <= 4aR and contains P
+    node = lv.record_node[0]
+    side = 2 * lv.node_half[node]
+    assert 2 * 0.1 * 2.0 < side <= 4 * 0.1 * 2.0
+    assert np.all(np.abs(np.array([1.0, 2.0, 3.0]) - lv.node_center[node]) <= lv.node_half[node])
 
 
 def test_front_test_excludes_a_record_in_front_of_the_query():

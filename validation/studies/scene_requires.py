@@ -68,6 +68,8 @@ B_MIN_Y = 2.5
 ON_PLANE = 1e-6
 #: the sun of the "sun without sky" case: due south, through the window
 SUN = {"altitude": 35.0, "azimuth": 180.0, "direct_normal_illuminance": 60000.0}
+#: The example's glazing without surface reflection.
+CLEAR_PORTAL = {"type": "glass", "transmittance": 0.6, "reflectance": 0.0, "portal": True}
 
 QUICK = {"accuracy": 0.2, "bounces": 2, "samples": 64}
 FULL = {"accuracy": 0.1, "bounces": 3, "samples": 512}
@@ -288,7 +290,9 @@ def run(ctx: StudyContext) -> Report:
     dark_scene = office_scene(folder, sky={"type": "none"}, sun=False)
     dark = _Run(dark_scene, Options(**setting), points, normals)
     ctx.step("no sky, no sun", dark.stats)
-    sun_scene = office_scene(folder, sky={"type": "none"}, sun=SUN)
+    # glass that reflects nothing: a reflecting pane can show the sun to a record outside
+    # (on the ground), and then the bounce-limit level is made (Integrator._level_active)
+    sun_scene = office_scene(folder, materials={"glazing": CLEAR_PORTAL}, sky={"type": "none"}, sun=SUN)
     sun = _Run(sun_scene, opts, points, normals)
     ctx.step("sun, no sky", sun.stats)
 
@@ -487,12 +491,15 @@ def _section_dark(report, res, dark, sun, points, B):
         f"light, and when both limits are given.)")
     report.text(
         f"The sun without a sky shows the other half of the rule. Records at the bounce limit (level {B}) "
-        f"hold only what their rays find in the sky and the ground glow (the deeper levels are cut off), "
-        f"which is dark, so that level is not made: levels 0–{B - 1} hold records, level {B} holds "
-        f"{res['sun_only']['bounce_limit_records']}.")
+        f"hold only what their rays find in the sky and the ground glow (the deeper levels are cut off) and "
+        f"the sun or a light surface seen in a mirror or a pane. With no sky and the window's glass set to "
+        f"reflect nothing that is dark, so the level is not made: levels 0–{B - 1} hold records, level {B} "
+        f"holds {res['sun_only']['bounce_limit_records']}. (With the example's reflecting glass it is made: "
+        f"from the ground outside, the sun can be seen in the pane.)")
     report.table(["light", *_levels_header(B), "rays"],
                  [["no sky, no sun, no light surface", *dark.records, dark.stats.rays],
-                  [f"sun only (altitude {fmt(SUN['altitude'])}°, due south), no sky", *sun.records, sun.stats.rays]],
+                  [f"sun only (altitude {fmt(SUN['altitude'])}°, due south), no sky, glass reflecting nothing",
+                   *sun.records, sun.stats.rays]],
                  caption="Records per level and rays.")
 
 
