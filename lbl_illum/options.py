@@ -81,10 +81,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 #: against the converged reference: (seconds, mean relative error, max relative error).
 #: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
 PRESET_MEASURED: dict[str, tuple[float, float, float]] = {
-    "draft": (0.84, 0.0199, 0.0567),
-    "low": (1.46, 0.0166, 0.0500),
-    "medium": (6.89, 0.0072, 0.0200),
-    "high": (23.33, 0.0043, 0.0164),
+    "draft": (0.38, 0.0199, 0.0567),
+    "low": (0.86, 0.0166, 0.0500),
+    "medium": (4.02, 0.0072, 0.0200),
+    "high": (12.85, 0.0043, 0.0164),
 }
 
 

@@ -438,7 +438,9 @@ class Measured:
 #: process's ``ru_maxrss`` the resident memory of the process image an ``exec`` replaces,
 #: so a child forked straight from this (large) process would report at least this
 #: process's own memory; forked from the launcher it reports at least the launcher's,
-#: about 7 MiB.
+#: about 7 MiB.  ``rtrace -n 2`` runs its work in child processes that ``ru_maxrss`` of
+#: the command does not always include, so the launcher also samples the resident memory
+#: of the command and its children every 0.05 s and reports the larger figure.
 LAUNCHER = r"""
 import json, os, signal, sys, threading, time
 spec = json.loads(sys.stdin.read())
@@ -480,12 +482,15 @@ def children(p):
             return [int(c) for c in f.read().split()]
     except (OSError, ValueError):
         return []
+peak = [0]
 def watch():
     limit, timeout = spec["memory_kib"], spec["timeout"]
-    while not done.wait(0.1):
+    while not done.wait(0.05):
         if timeout and time.perf_counter() - t0 > timeout:
             return stop("timeout")
-        if limit and rss_kib(pid) + sum(rss_kib(c) for c in children(pid)) > limit:
+        total = rss_kib(pid) + sum(rss_kib(c) for c in children(pid))
+        peak[0] = max(peak[0], total)
+        if limit and total > limit:
             return stop("memory")
 done = threading.Event()
 threading.Thread(target=watch, daemon=True).start()
@@ -493,7 +498,7 @@ _, status, usage = os.wait4(pid, 0)
 seconds = time.perf_counter() - t0
 done.set()
 print(json.dumps({"returncode": os.waitstatus_to_exitcode(status), "seconds": seconds,
-                  "maxrss_kib": usage.ru_maxrss, "stopped": why[0] if why else None}))
+                  "maxrss_kib": max(usage.ru_maxrss, peak[0]), "stopped": why[0] if why else None}))
 """
 
 
@@ -1197,8 +1202,10 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
         "sky's light as the first), minus the view and picture "
         "options; they include rad's own `-av` (a constant ambient at the bounce limit) and `-lr`/`-lw`.  "
         "QUALITY=LOW sets no `-ab` (0: the ambient is `-av` alone).",
-        "Peak memory: `ru_maxrss` of the child from `os.wait4` (for `rtrace -n 2`, the largest of its processes), "
-        "started from a small launcher process (about 7 MiB of any figure is the launcher's image).",
+        "Peak memory: the larger of `ru_maxrss` of the child from `os.wait4` and the resident memory of the child "
+        "and its own children sampled every 0.05 s (for `rtrace -n 2`, the sum over its processes, whose "
+        "`ru_maxrss` the parent does not always include); children start from a small launcher process "
+        "(about 7 MiB of any figure is the launcher's image).",
         "Errors: per point |E/E_ref − 1|, mean and max over the points, and the mean signed error (bias).",
         "Equal error: time interpolated on each program's Pareto front, linear in log seconds against log error; "
         "“≤” where the program's fastest run is already within the level (its time is an upper bound), "

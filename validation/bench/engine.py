@@ -270,10 +270,12 @@ def numba_kernels() -> set:
     for name, module in list(sys.modules.items()):
         if not (name == "lbl_illum" or name.startswith("lbl_illum.")) or module is None:
             continue
-        for obj in vars(module).values():
-            if isinstance(obj, Dispatcher):
-                code = obj.py_func.__code__
-                found.add((code.co_filename, code.co_firstlineno))
+        for value in vars(module).values():
+            # kernels compiled serial and parallel are kept as a pair (compiled.py)
+            for obj in (value if isinstance(value, tuple) else (value,)):
+                if isinstance(obj, Dispatcher):
+                    code = obj.py_func.__code__
+                    found.add((code.co_filename, code.co_firstlineno))
     return found
 
 
