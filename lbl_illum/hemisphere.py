@@ -13,7 +13,7 @@ solid angle, so the estimate is an unweighted mean.  N ≈ π M keeps cells squa
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
+from numba import njit, prange
 
 from .compiled import PARALLEL_MIN, serial_and_parallel
 
@@ -45,15 +45,20 @@ def cell_counts(samples: int) -> tuple[int, int]:
     return m, n
 
 
+@njit(cache=True, inline="always")
+def _tangents(nx, ny, nz):
+    """The two tangents of :func:`orthonormal_basis` for one unit normal (Duff et al. 2017)."""
+    sign = 1.0 if nz >= 0.0 else -1.0
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    return 1.0 + sign * nx * nx * a, sign * b, -sign * nx, b, sign + ny * ny * a, -ny
+
+
 def _stratified(normals, u, v, m, n, out):
     """Compiled body of :func:`stratified_directions`."""
     for i in prange(normals.shape[0]):
         nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
-        sign = 1.0 if nz >= 0.0 else -1.0          # Duff et al. 2017, as orthonormal_basis
-        a = -1.0 / (sign + nz)
-        b = nx * ny * a
-        tx, ty, tz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
-        bx, by, bz = b, sign + ny * ny * a, -ny
+        tx, ty, tz, bx, by, bz = _tangents(nx, ny, nz)
         for j in range(m):
             for k in range(n):
                 c = j * n + k
@@ -170,11 +175,7 @@ def _gradients(normals, directions, radiance, distances, rot, trans):
     C = radiance.shape[3]
     for i in prange(r):
         nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
-        sign = 1.0 if nz >= 0.0 else -1.0          # Duff et al. 2017, as orthonormal_basis
-        a = -1.0 / (sign + nz)
-        b = nx * ny * a
-        tx, ty, tz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
-        bx, by, bz = b, sign + ny * ny * a, -ny
+        tx, ty, tz, bx, by, bz = _tangents(nx, ny, nz)
         scale = np.pi / (m * n)
         inv = np.empty((m, n))
         for j in range(m):
