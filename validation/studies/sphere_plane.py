@@ -27,9 +27,7 @@ Illuminance is in lux, lengths in metres, angles in degrees unless stated.
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import os
 import re
 import subprocess
 import tempfile
@@ -45,6 +43,7 @@ from lbl_illum.cache import LevelRecords
 from lbl_illum.hemisphere import cell_counts, irradiance_gradients, limit_gradients, stratified_directions
 from lbl_illum.integrator import RunStats
 from lbl_illum.photometry import luminance
+from lbl_illum.radiance import radiance_programs
 from lbl_illum.scene import scene_from_dict
 from lbl_illum.sun import SUN_SOLID_ANGLE
 
@@ -310,22 +309,6 @@ def query_order(points, normals, kind: str, seed: int = 0) -> np.ndarray:
 
 
 # -- Radiance ----------------------------------------------------------------------------------
-def radiance_programs() -> dict | None:
-    """Paths of the Radiance programs bundled with the ``pyradiance`` wheel (its ``bin``
-    and ``lib`` folders), or None when the package is not installed.  The package is
-    located without importing it (its import changes the environment)."""
-    spec = importlib.util.find_spec("pyradiance")
-    if spec is None or spec.origin is None:
-        return None
-    root = Path(spec.origin).parent
-    bins = {name: root / "bin" / name for name in ("oconv", "rtrace", "lookamb", "getinfo")}
-    if not all(p.is_file() for p in bins.values()):
-        return None
-    env = dict(os.environ)
-    env["RAYPATH"] = os.pathsep.join([str(root / "lib"), env.get("RAYPATH", "")]).rstrip(os.pathsep)
-    return {"bin": bins, "env": env, "root": root}
-
-
 def radiance_scene(half_width: float = HALF_WIDTH) -> str:
     """The same scene in Radiance's language.  The sun is a ``source`` whose solid angle
     2π(1 − cos(angle/2)) equals the engine's 6.8e-5 sr, with radiance such that its normal
