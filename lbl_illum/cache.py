@@ -13,7 +13,9 @@ depends only on its query and the records, not on the other queries of the batch
 or the number of threads.
 
 File format (``.npz``, version 1): arrays ``L{k}_P``, ``L{k}_N``, ``L{k}_E``,
-``L{k}_R``, ``L{k}_Gr``, ``L{k}_Gt`` (rotational and translational gradients) per level and a ``header`` holding JSON: ``format``, ``version``,
+``L{k}_R``, ``L{k}_Gr``, ``L{k}_Gt`` (rotational and translational gradients) per level
+(and ``L{k}_W``, ``L{k}_leak`` for elliptical domains) and a ``header`` holding JSON:
+``format``, ``version``, ``domains`` (``round`` or ``elliptical``),
 ``fingerprint`` (of the scene and the settings that the records depend on),
 ``accuracy`` per level, ``records`` per level, ``center`` and ``half`` of the octree's
 root cube [m], and ``checksum``, the SHA-256 of the record arrays.
@@ -49,16 +51,18 @@ class LevelRecords:
 
     Record arrays, indexed by record and growable (rows past ``count`` are spare
     capacity): ``P`` (n, 3) float64 [m], ``N`` (n, 3) float32, ``R`` (n,) float32 [m],
-    fixed once added; ``E`` (n, 3) float32 [lux], ``Gr`` (n, 3, 3) float32 [lux/rad] and
-    ``Gt`` (n, 3, 3) float32 [lux/m], writable views of one (n, 7, 3) block (write into
+    fixed once added; ``E`` (n, 3) float32 [lux], ``Gr`` (n, 3, 3) float32 [lux/rad],
+    ``Gt`` (n, 3, 3) float32 [lux/m] and ``W`` (n, 3), writable views of one (n, 8, 3) block (write into
     them, or use :meth:`set_values`; the next lookup uses the new values); and
-    ``record_node`` (n,) int32, the octree node holding each record.  Octree nodes:
+    ``leak`` (n,) uint32, the sectors in which a record may not be used (see
+    :func:`lbl_illum.hemisphere.leak_sectors`; ``W`` and ``leak`` are used only by an
+    ``anisotropic`` level); ``record_node`` (n,) int32, the octree node holding each record.  Octree nodes:
     ``node_center`` (m, 3) [m], ``node_half`` (m,) [m], ``node_child`` (m, 8) int32.
     Lookups use the :class:`octree.Layout` made by :meth:`freeze`, redone after insertions.
 
-    Memory per record: 128 bytes in the record arrays, 44 in the lookup layout (P, N, R
-    in layout order and the permutation), about 3.4 for its boxes and 64 per octree node
-    (a node per 12 to 40 records): about 180 bytes, plus the spare capacity (arrays
+    Memory per record: 128 bytes in the record arrays (144 with elliptical domains), 44
+    in the lookup layout (P, N, R in layout order and the permutation), about 3.4 for its
+    boxes and 64 per octree node (a node per 12 to 40 records): about 190 (206) bytes, plus the spare capacity (arrays
     grow by half when full).  :meth:`nbytes` lists them.
     """
 
@@ -69,14 +73,19 @@ class LevelRecords:
     #: neighbours, see :mod:`lbl_illum.octree`); the sort costs about 20 ns a query.
     SORT_MIN_QUERIES = 1024
 
-    def __init__(self, accuracy: float, center: np.ndarray, half: float, capacity: int = 1024):
+    def __init__(self, accuracy: float, center: np.ndarray, half: float, capacity: int = 1024,
+                 anisotropic: bool = False):
         self.accuracy = float(accuracy)
+        #: records have elliptical domains and leak sectors (``W``, ``leak``)
+        self.anisotropic = bool(anisotropic)
         self.count = 0
         capacity = max(1, int(capacity))
         self.P = np.zeros((capacity, 3), np.float64)
         self.N = np.zeros((capacity, 3), np.float32)
         self.R = np.zeros(capacity, np.float32)
-        self._values = np.zeros((capacity, 7, 3), np.float32)   # E, Gr (3 rows), Gt (3 rows) per record
+        # E, Gr (3 rows), Gt (3 rows) and, for elliptical domains, W per record
+        self._values = np.zeros((capacity, 8 if anisotropic else 7, 3), np.float32)
+        self.leak = np.zeros(capacity if anisotropic else 0, np.uint32)
         self.record_node = np.full(capacity, -1, np.int32)
         self._tree_version = 0
         self._frozen = None
@@ -93,8 +102,8 @@ class LevelRecords:
         self._tree_version += 1
         self._frozen = None
 
-    # E, Gr and Gt are views of one (capacity, 7, 3) block, so that a lookup reads a
-    # record's value and gradients from 84 adjacent bytes
+    # E, Gr, Gt (and W) are views of one (capacity, 7 or 8, 3) block, so that a lookup reads
+    # a record's value, gradients (and shape) from 84 (96) adjacent bytes
     @property
     def E(self) -> np.ndarray:
         """(capacity, 3) float32 irradiance [lux] (a writable view)."""
@@ -110,13 +119,28 @@ class LevelRecords:
         """(capacity, 3, 3) float32 translational gradient [lux/m], one row per channel (a writable view)."""
         return self._values[:, 4:7, :]
 
+    @property
+    def W(self) -> np.ndarray:
+        """(capacity, 3) float32 shape vector of an elliptical domain [1] (a writable view).
+
+        Along the short axis u (unit, tangent) with radii R_s ≤ R: W = u sqrt((R/R_s)² − 1),
+        so that |P − P_i|²/R² + ((P − P_i)·W)²/R² is the squared elliptical distance
+        (:func:`lbl_illum.octree.lookup`); zero for a round domain.  Only an
+        ``anisotropic`` level has it.
+        """
+        if not self.anisotropic:
+            raise AttributeError("round record domains have no shape vector W")
+        return self._values[:, 7, :]
+
     def _grow_records(self, needed):
         cap = len(self.R)
         if needed <= cap:
             return
         new = max(needed, cap + cap // 2)
-        for name in ("P", "N", "R", "_values", "record_node"):
+        for name in ("P", "N", "R", "_values", "leak", "record_node"):
             old = getattr(self, name)
+            if len(old) == 0:
+                continue
             arr = np.zeros((new,) + old.shape[1:], old.dtype)
             arr[: self.count] = old[: self.count]
             setattr(self, name, arr)
@@ -149,9 +173,10 @@ class LevelRecords:
             if start < stop:
                 self._grow_nodes()
 
-    def add(self, P, N, R, E=None, Gr=None, Gt=None) -> np.ndarray:
-        """Append records (E and the gradients default to zero, to be set once evaluated);
-        return their indices."""
+    def add(self, P, N, R, E=None, Gr=None, Gt=None, W=None, leak=None) -> np.ndarray:
+        """Append records (E and the gradients default to zero, to be set once evaluated;
+        W and ``leak``, the domain's shape and leak sectors, to a round domain); return
+        their indices."""
         P = np.asarray(P, np.float64).reshape(-1, 3)
         k = len(P)
         start = self.count
@@ -162,6 +187,9 @@ class LevelRecords:
         self.E[start:start + k] = 0.0 if E is None else E
         self.Gr[start:start + k] = 0.0 if Gr is None else Gr
         self.Gt[start:start + k] = 0.0 if Gt is None else Gt
+        if self.anisotropic:
+            self.W[start:start + k] = 0.0 if W is None else W
+            self.leak[start:start + k] = 0 if leak is None else leak
         self.count = start + k
         if k and self.accuracy > 0:
             if not np.all(self._contains(P)):
@@ -206,7 +234,8 @@ class LevelRecords:
             else:
                 order = np.arange(n)
             parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
-            octree.lookup(P, N, order, layout, self._values, gradients, self.accuracy, out_E, out_w, out_n, parallel)
+            octree.lookup(P, N, order, layout, self._values, self.leak, gradients, self.anisotropic, self.accuracy,
+                          out_E, out_w, out_n, parallel)
         return out_E, out_w, out_n
 
     def freeze(self) -> octree.Layout:
@@ -223,8 +252,8 @@ class LevelRecords:
         """Bytes held per array (records, octree nodes, lookup layout), by name, counted
         as allocated (spare capacity included)."""
         out = {name: getattr(self, name).nbytes for name in
-               ("P", "N", "R", "record_node", "node_center", "node_half", "node_child")}
-        out["E, Gr, Gt"] = self._values.nbytes
+               ("P", "N", "R", "leak", "record_node", "node_center", "node_half", "node_child")}
+        out["E, Gr, Gt, W"] = self._values.nbytes
         if self._frozen is not None:
             for name, arr in self._frozen[1]._asdict().items():
                 if isinstance(arr, np.ndarray):
@@ -234,7 +263,8 @@ class LevelRecords:
     def arrays(self) -> dict:
         """Copies of the record arrays that a cache file holds (``count`` rows each)."""
         n = self.count
-        return {name: getattr(self, name)[:n].copy() for name in ("P", "N", "E", "R", "Gr", "Gt")}
+        names = ("P", "N", "E", "R", "Gr", "Gt") + (("W", "leak") if self.anisotropic else ())
+        return {name: getattr(self, name)[:n].copy() for name in names}
 
 
 class IrradianceCache:
@@ -245,11 +275,12 @@ class IrradianceCache:
     center, half : octree root cube [m]
     """
 
-    def __init__(self, fingerprint: str, accuracies, center, half):
+    def __init__(self, fingerprint: str, accuracies, center, half, anisotropic: bool = False):
         self.fingerprint = fingerprint
         self.center = np.asarray(center, np.float64)
         self.half = float(half)
-        self.levels = [LevelRecords(a, self.center, self.half) for a in accuracies]
+        self.anisotropic = bool(anisotropic)
+        self.levels = [LevelRecords(a, self.center, self.half, anisotropic=anisotropic) for a in accuracies]
 
     @property
     def record_counts(self) -> list[int]:
@@ -279,6 +310,7 @@ class IrradianceCache:
             "format": CACHE_FORMAT, "version": CACHE_FORMAT_VERSION, "fingerprint": self.fingerprint,
             "accuracy": [lv.accuracy for lv in self.levels], "records": self.record_counts,
             "center": self.center.tolist(), "half": self.half, "checksum": self._checksum(arrays),
+            "domains": "elliptical" if self.anisotropic else "round",
         }
         buf = io.BytesIO()
         np.savez(buf, header=np.array(json.dumps(header)), **arrays)
@@ -307,10 +339,12 @@ class IrradianceCache:
             raise InputError(f"{name}: cache was made for another scene or other settings "
                              "(geometry, materials, sky, sun, accuracy, bounces, samples, ambient or "
                              "bounce scaling differ)")
-        cache = cls(header["fingerprint"], header["accuracy"], header["center"], header["half"])
+        anisotropic = header.get("domains", "round") == "elliptical"
+        cache = cls(header["fingerprint"], header["accuracy"], header["center"], header["half"], anisotropic)
         for k, lv in enumerate(cache.levels):
             P = arrays[f"L{k}_P"]
             if len(P):
+                shape = (arrays[f"L{k}_W"], arrays[f"L{k}_leak"]) if anisotropic else (None, None)
                 lv.add(P, arrays[f"L{k}_N"], arrays[f"L{k}_R"], arrays[f"L{k}_E"], arrays[f"L{k}_Gr"],
-                       arrays[f"L{k}_Gt"])
+                       arrays[f"L{k}_Gt"], *shape)
         return cache

@@ -55,7 +55,8 @@ from numba import njit
 
 from .cache import IrradianceCache, LevelRecords
 from .direct import DirectLight
-from .hemisphere import cell_counts, cosine_directions, irradiance_gradients, limit_gradients, stratified_directions
+from .hemisphere import (cell_counts, cosine_directions, hessian_radii, irradiance_gradients, irradiance_hessian,
+                         leak_sectors, limit_gradients, stratified_directions)
 from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
 from .options import Options
 from .placement import distance_bands, pick_per_cell
@@ -77,6 +78,9 @@ MAX_SPACING_FRACTION = 0.5
 SPACING_RATIO = 16.0
 #: Portal samples per primary evaluation, as a fraction of its hemisphere samples.
 PORTAL_SAMPLE_FRACTION = 0.5
+#: Rays that reach the sky count as hits this many times the largest record spacing away
+#: in the Hessian of a record's hemisphere (:func:`~lbl_illum.hemisphere.irradiance_hessian`).
+HESSIAN_FAR = 1e4
 #: Passes of placement before all remaining uncovered queries are taken at once.
 MAX_PASSES = 64
 #: Hemisphere rays traced in one batch: the records of a pass are traced in blocks of at
@@ -175,6 +179,8 @@ def scene_fingerprint(scene: Scene, options: Options) -> str:
         "options": (options.ambient, [options.level_accuracy(k) for k in range(options.bounces + 1)],
                     [options.level_samples(k) for k in range(options.bounces + 1)]),
     }
+    if options.interpolation == "hessian":      # other record radii
+        desc["domains"] = "hessian"
     h.update(json.dumps(desc, sort_keys=True).encode())
     return h.hexdigest()
 
@@ -240,6 +246,8 @@ class Integrator:
         specular = np.isin(self.materials.kind[used], (MIRROR, GLASS)) & (self.materials.reflectance[used].max(axis=1) > 0)
         #: some surface reflects specularly (a mirror, or glass with reflectance)
         self._reflects = bool(specular.any())
+        #: elliptical record domains from the Hessian (``interpolation = "hessian"``)
+        self.hessian = self.options.interpolation == "hessian"
         self.fingerprint = scene_fingerprint(scene, self.options)
         self.progress = progress
         B = self.options.bounces
@@ -273,7 +281,7 @@ class Integrator:
         lo = np.minimum(self.scene.triangles.bounds[0], points.min(axis=0))
         hi = np.maximum(self.scene.triangles.bounds[1], points.max(axis=0))
         half = 0.5 * float(np.max(hi - lo)) * 1.01 + 1e-9
-        return IrradianceCache(self.fingerprint, self.accuracies, 0.5 * (lo + hi), half)
+        return IrradianceCache(self.fingerprint, self.accuracies, 0.5 * (lo + hi), half, anisotropic=self.hessian)
 
     # -- spacing ----------------------------------------------------------------------
     def default_spacing(self, points, normals) -> tuple[float, float]:
@@ -401,7 +409,9 @@ class Integrator:
 
     # -- placement (top-down) ---------------------------------------------------------
     def _evaluate_hemispheres(self, k, P, Ns, Ng, pending: _Pending, rng):
-        """Trace the hemispheres of new records at (P, Ns); return their R_i (unclamped)."""
+        """Trace the hemispheres of new records at (P, Ns); return their radii R_i
+        (clamped), the shapes W_i of elliptical domains and the leak sectors (both None
+        for round domains)."""
         samples = self.options.level_samples(k)
         m, n = cell_counts(samples)
         S = m * n
@@ -454,12 +464,41 @@ class Integrator:
             pending.hit_ray.append(hit_ray.astype(np.int32))
         pending.known.append(known)
         pending.samples.append(np.full(r, S))
+        if self.hessian and self.cache.levels[k].accuracy > 0:
+            return self._hessian_domains(k, P, Ns, dirs, radiance, first_t, m, n)
         inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
         with np.errstate(divide="ignore"):
             R0 = np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
         if self.cache.levels[k].accuracy > 0 and self.gradient_limit:
             R0 = np.minimum(R0, self._known_gradient_limit(Ns, dirs, radiance, first_t, m, n))
-        return R0
+        return self._clamp_radius(R0, P), None, None
+
+    def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n):
+        """Elliptical record domains from the Hessian of the light known at trace time
+        (``interpolation = "hessian"``; :func:`~lbl_illum.hemisphere.irradiance_hessian`).
+
+        The values are the luminance of the sky, ground and light seen along each ray
+        (what the levels below add is not known yet), scaled to a mean of 0.99 and raised
+        by 0.01 so that the geometry alone still shapes the domains where little light is
+        known — all 1 where none is (Radiance 5's rule).  Returns (R, W, leak) with R the
+        long radius.
+        """
+        r, S = len(P), m * n
+        Y = luminance(radiance).reshape(r, S)
+        total = Y.sum(axis=1)
+        lit = total > 0.0
+        scale = np.where(lit, 0.99 * S / np.where(lit, total, 1.0), 0.0)
+        values = np.where(lit[:, None], Y * scale[:, None] + 0.01, 1.0).reshape(r, m, n)
+        terms = irradiance_hessian(Ns, dirs.reshape(r, m, n, 3), values, first_t.reshape(r, m, n),
+                                   HESSIAN_FAR * self.max_spacing)
+        accuracy = self.cache.levels[k].accuracy
+        R_s, R_l, axis = hessian_radii(Ns, terms, accuracy)
+        R_s = self._clamp_radius(R_s, P)
+        R_l = np.maximum(self._clamp_radius(R_l, P), R_s)
+        W = axis * np.sqrt(np.maximum((R_l / R_s) ** 2 - 1.0, 0.0))[:, None]
+        leak = leak_sectors(Ns, dirs.reshape(r, S, 3), first_t.reshape(r, S), accuracy * R_s, accuracy * R_l,
+                            axis, n)
+        return R_l, W, leak
 
     def _known_gradient_limit(self, normals, dirs, radiance, first_t, m, n):
         """R_i ≤ E / |∇_t E| (Ward & Heckbert 1992, §3) for the part of each record's
@@ -552,7 +591,7 @@ class Integrator:
             rng = self._rng(_TAG_HEMISPHERE, k, key + start)
             parts.append(self._evaluate_hemispheres(k, P[block], Ns[block], Ng[block], pending, rng))
             self._tick()
-        return np.concatenate(parts)
+        return tuple(None if part[0] is None else np.concatenate(part) for part in zip(*parts))
 
     def _clamp_radius(self, R0, P):
         lo_box, hi_box = self._roi
@@ -575,8 +614,8 @@ class Integrator:
         Ns = np.asarray(Ns, np.float64)
         Ng = np.asarray(Ng, np.float64)
         if lv.accuracy == 0.0:
-            R0 = self._trace_records(k, P, Ns, Ng, pending, lv.count)
-            idx = lv.add(P, Ns, self._clamp_radius(R0, P))
+            R, W, leak = self._trace_records(k, P, Ns, Ng, pending, lv.count)
+            idx = lv.add(P, Ns, R, W=W, leak=leak)
             pending.records.append(idx)
             stats.new_records[k] += nq
             self._tick()
@@ -599,16 +638,16 @@ class Integrator:
             else:
                 local = pick_per_cell(tP, tN, band, cell)
             pP, pN = tP[local], tN[local]
-            R0 = self._trace_records(k, pP, pN, Ng[todo[local]], pending, lv.count)
-            R = self._clamp_radius(R0, pP)
-            pending.records.append(lv.add(pP, pN, R))
+            R, W, leak = self._trace_records(k, pP, pN, Ng[todo[local]], pending, lv.count)
+            pending.records.append(lv.add(pP, pN, R, W=W, leak=leak))
             stats.new_records[k] += len(local)
             keep = np.ones(len(todo), bool)
             keep[local] = False
             if keep.any():
                 # only this pass's records can cover what was uncovered before it
-                fresh = LevelRecords(lv.accuracy, lv.node_center[0], lv.node_half[0], capacity=len(local))
-                fresh.add(pP, pN, R)
+                fresh = LevelRecords(lv.accuracy, lv.node_center[0], lv.node_half[0], capacity=len(local),
+                                     anisotropic=lv.anisotropic)
+                fresh.add(pP, pN, R, W=W, leak=leak)
                 idx = np.flatnonzero(keep)
                 _, _, count = fresh.lookup(tP[idx], tN[idx])
                 keep[idx[count > 0]] = False
@@ -623,7 +662,7 @@ class Integrator:
         lv = self.cache.levels[k]
         if own_record is not None:
             return lv.E[own_record].astype(np.float64)
-        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation == "gradients")
+        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper")
         return E
 
     def evaluate_level(self, k, pending: _Pending, next_answer):

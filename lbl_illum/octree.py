@@ -51,6 +51,7 @@ import numpy as np
 from numba import njit, prange
 
 from .compiled import serial_and_parallel
+from .hemisphere import LEAK_SECTORS
 
 __all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "MIN_ERROR", "LANES", "Layout", "insert_records", "freeze",
            "query_order", "lookup"]
@@ -355,8 +356,26 @@ def _f32_above(x):
     return np.float32(x + (abs(x) * 2.0 ** -22 + 1e-37))
 
 
-def _lookup(qP, qN, order, n_blocks, accuracy, gradients, V, perm, pos, nr, box, level_start, packet_extent,
-            out_E, out_w, out_n):
+@njit(cache=True, inline="always")
+def _sector_open(mask, dx, dy, dz, mx, my, mz, Ri):
+    """Whether displacement d from a record with unit normal m avoids its leak sectors
+    (:func:`lbl_illum.hemisphere.leak_sectors`: LEAK_SECTORS sectors of the tangent
+    plane, from the first tangent of the Duff et al. basis).  A query within 10⁻³ R_i of
+    the record's normal line has no direction and is always admitted."""
+    sign = 1.0 if mz >= 0.0 else -1.0
+    a = -1.0 / (sign + mz)
+    b = mx * my * a
+    u = dx * (1.0 + sign * mx * mx * a) + dy * (sign * b) - dz * sign * mx
+    v = dx * b + dy * (sign + my * my * a) - dz * my
+    if u * u + v * v <= 1e-6 * Ri * Ri:
+        return True
+    phi = np.arctan2(v, u)
+    sector = int(np.floor(phi * (LEAK_SECTORS / (2.0 * np.pi)))) % LEAK_SECTORS
+    return (mask >> np.uint32(sector)) & np.uint32(1) == 0
+
+
+def _lookup(qP, qN, order, n_blocks, accuracy, gradients, shaped, V, leak, perm, pos, nr, box, level_start,
+            packet_extent, out_E, out_w, out_n):
     """Eq. 5 at each query ``order[k]``, the queries split into ``n_blocks`` runs (one
     per parallel task), each with its own buffers.
 
@@ -501,11 +520,19 @@ def _lookup(qP, qN, order, n_blocks, accuracy, gradients, V, perm, pos, nr, box,
                         my = np.float64(nr[1, j])
                         mz = np.float64(nr[2, j])
                         ndot = min(nx * mx + ny * my + nz * mz, 1.0)
-                        err = np.sqrt(dx * dx + dy * dy + dz * dz) / Ri + np.sqrt(1.0 - ndot)
+                        d2 = dx * dx + dy * dy + dz * dz
+                        ok = True
+                        if shaped:              # elliptical domain and leak sectors
+                            i = perm[j]
+                            dw = dx * V[i, 7, 0] + dy * V[i, 7, 1] + dz * V[i, 7, 2]
+                            d2 += dw * dw
+                            if leak[i] != 0:
+                                ok = _sector_open(leak[i], dx, dy, dz, mx, my, mz, Ri)
+                        err = np.sqrt(d2) / Ri + np.sqrt(1.0 - ndot)
                         front = 0.5 * (dx * (nx + mx) + dy * (ny + my) + dz * (nz + mz))
                         hit_j[n_hit] = j
                         hit_w[n_hit] = 1.0 / max(err, MIN_ERROR)
-                        n_hit += (err < accuracy) & (front >= -FRONT_TOLERANCE * Ri)
+                        n_hit += (err < accuracy) & (front >= -FRONT_TOLERANCE * Ri) & ok
                     for c in range(n_hit):
                         j = hit_j[c]
                         w = hit_w[c]
@@ -554,13 +581,15 @@ def _lookup(qP, qN, order, n_blocks, accuracy, gradients, V, perm, pos, nr, box,
 _lookup_kernels = serial_and_parallel(_lookup)
 
 
-def lookup(qP, qN, order, layout: Layout, V, gradients, accuracy, out_E, out_w, out_n, parallel):
+def lookup(qP, qN, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel):
     """Interpolate (Eq. 5) the records valid at each query on a :func:`freeze` layout.
 
     qP, qN : (q, 3) float64 query positions [m] and unit normals
     order : (q,) int, the order in which to visit the queries (a permutation)
-    V : (n, 7, 3) float32, by record: irradiance E_i (row 0), rotational gradient ∇_r E_i
-        (rows 1–3, one per channel) and translational gradient ∇_t E_i (rows 4–6)
+    V : (n, 8, 3) float32, by record: irradiance E_i (row 0), rotational gradient ∇_r E_i
+        (rows 1–3, one per channel), translational gradient ∇_t E_i (rows 4–6) and the
+        shape vector W_i of an elliptical domain (row 7)
+    leak : (n,) uint32 leak sectors per record
     out_E, out_w, out_n : (q, 3), (q,), (q,) outputs, written at each query's index
 
     With ``gradients`` a record contributes E_i + (N_i × N)·∇_r E_i + (P − P_i)·∇_t E_i
@@ -570,10 +599,14 @@ def lookup(qP, qN, order, layout: Layout, V, gradients, accuracy, out_E, out_w, 
     Eq. 5 is evaluated (its ε_i ≥ |P − P_i|/R_i ≥ a); the margin keeps that cheap test
     from ever deciding a boundary case.  ``parallel`` runs the queries on numba's
     threads (worth it only for batches of thousands of queries).
+
+    With ``shaped`` (Hessian-based records, :func:`lbl_illum.hemisphere.hessian_radii`)
+    the distance term of Eq. 5 is elliptical, sqrt(|d|² + (d·W_i)²)/R_i with R_i the long
+    radius, and a record is not used for queries in its leak sectors.
     """
     # a few blocks per thread: each block allocates its own buffers (the list of
     # level-1 boxes is sized for all of them)
     n_blocks = min(len(qP) // 256 + 1, 8 * numba.get_num_threads()) if parallel else 1
-    _lookup_kernels[bool(parallel)](qP, qN, order, n_blocks, accuracy, bool(gradients), V, layout.perm, layout.pos,
-                                    layout.nr, layout.box, layout.level_start, float(layout.packet_extent),
-                                    out_E, out_w, out_n)
+    _lookup_kernels[bool(parallel)](qP, qN, order, n_blocks, accuracy, bool(gradients), bool(shaped), V, leak,
+                                    layout.perm, layout.pos, layout.nr, layout.box, layout.level_start,
+                                    float(layout.packet_extent), out_E, out_w, out_n)

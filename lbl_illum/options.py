@@ -25,7 +25,9 @@ option                 default  meaning
                                 among the points buys little
 ``interpolation``      gradients  ``paper``: Eq. 5 as published; ``gradients``: each record
                                 extrapolated by its rotational and translational gradients
-                                (Ward & Heckbert 1992) before the Eq. 5 average
+                                (Ward & Heckbert 1992) before the Eq. 5 average; ``hessian``:
+                                that, with elliptical record domains sized by the irradiance
+                                Hessian and leak sectors (Schwarzhaupt et al. 2012)
 =====================  =======  ============================================================
 
 **Presets** (``--preset`` on the command line, ``preset = "..."`` under ``[settings]``)
@@ -62,8 +64,9 @@ BOUNCE_ACCURACY_CAP = 2.0
 BOUNCE_ACCURACY_LIMIT = 0.4
 #: §3.4: factor on the sample count per deeper diffuse level.
 BOUNCE_SAMPLE_FACTOR = 0.5
-#: Interpolation rules: the paper's Eq. 5, or Eq. 5 over gradient-extrapolated values.
-INTERPOLATIONS = ("paper", "gradients")
+#: Interpolation rules: the paper's Eq. 5, Eq. 5 over gradient-extrapolated values, and that
+#: with Hessian-sized elliptical domains.
+INTERPOLATIONS = ("paper", "gradients", "hessian")
 #: Floor on the samples of a deeper-level primary evaluation (never above the first level's).
 MIN_DEEP_SAMPLES = 16
 

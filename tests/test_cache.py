@@ -19,20 +19,26 @@ def office():
 OPTS = Options(accuracy=0.2, bounces=2, samples=128)
 
 
-def test_second_run_from_file_is_identical_and_computes_no_record(office, tmp_path):
+@pytest.mark.parametrize("opts", [OPTS, OPTS.replace(interpolation="hessian")], ids=["round", "elliptical"])
+def test_second_run_from_file_is_identical_and_computes_no_record(office, tmp_path, opts):
     scene, points, normals = office
-    first = Integrator(scene, OPTS)
+    first = Integrator(scene, opts)
     r1 = first.compute(points, normals)
     assert r1.stats.primary_evaluations > 0
     path = tmp_path / "office.lblcache"
     first.cache.save(path)
-    second = Integrator(scene, OPTS)
+    second = Integrator(scene, opts)
     second.cache = IrradianceCache.load(path, second.fingerprint)
     assert second.cache.record_counts == first.cache.record_counts
     r2 = second.compute(points, normals)
     assert r2.stats.primary_evaluations == 0
     assert np.array_equal(r1.illuminance, r2.illuminance)
     assert r2.stats.rays < r1.stats.rays / 5
+    if opts.interpolation == "hessian":      # the domains' shapes and leak sectors came back
+        for a, b in zip(first.cache.levels, second.cache.levels):
+            n = a.count
+            assert b.anisotropic and np.array_equal(a.W[:n], b.W[:n]) and np.array_equal(a.leak[:n], b.leak[:n])
+        assert any(lv.leak[:lv.count].any() for lv in second.cache.levels)
 
 
 def test_cache_of_other_settings_or_scene_is_refused(office, tmp_path):

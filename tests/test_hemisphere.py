@@ -124,3 +124,103 @@ def test_gradients_stay_finite_and_limited_for_rays_hitting_at_zero_distance():
     assert np.all(np.isfinite(rot)) and np.all(np.isfinite(trans))
     assert np.all(np.linalg.norm(trans, axis=2) * 0.05 <= 500.0 * (1 + 1e-12))
     assert np.all(np.linalg.norm(rot, axis=2) * 0.1 <= 500.0 * (1 + 1e-12))
+
+
+# -- Hessian-based record domains -----------------------------------------------------------
+
+def _wall_strip_hemisphere(x0, h, m, n):
+    """A receiver at the origin facing up, a black wall strip of height ``h`` along the
+    plane y = x0, sky of luminance 1 elsewhere; directions at the cell centres."""
+    j = (np.arange(m) + 0.5) / m
+    k = (np.arange(n) + 0.5) / n
+    sin_t = np.sqrt(j)[:, None] * np.ones(n)
+    cos_t = np.sqrt(1.0 - j)[:, None] * np.ones(n)
+    phi = 2.0 * np.pi * np.ones(m)[:, None] * k
+    d = np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), cos_t], axis=-1)[None]
+    with np.errstate(divide="ignore"):
+        t = np.where(d[..., 1] > 0, x0 / np.where(d[..., 1] > 0, d[..., 1], 1.0), np.inf)
+    wall = np.isfinite(t) & (t * d[..., 2] <= h)
+    return np.array([[0.0, 0.0, 1.0]]), d, np.where(wall, 0.0, 1.0), np.where(wall, t, np.inf)
+
+
+def test_hessian_of_a_wall_strip_converges_to_the_analytic_derivatives():
+    """Under a uniform sky of luminance 1, a floor point at distance x from an infinitely
+    long black wall of height h has E(x) = π/2 (1 + x/sqrt(x² + h²)) (the wall's view
+    factor is (1 − x/sqrt(x² + h²))/2), so dE/dx = π/2 h²/(x² + h²)^{3/2} and
+    d²E/dx² = −3π/2 x h²/(x² + h²)^{5/2}; along the wall nothing changes.  The tangents
+    of a +z normal are +x and +y, and moving by +y moves towards the wall."""
+    from lbl_illum.hemisphere import irradiance_hessian
+
+    x0, h = 1.0, 2.0
+    s = x0 * x0 + h * h
+    want = np.array([np.pi / 2 * (1 + x0 / np.sqrt(s)), 0.0, -np.pi / 2 * h * h / s ** 1.5, 0.0, 0.0,
+                     -1.5 * np.pi * x0 * h * h / s ** 2.5])
+    errors = []
+    for m, n in ((16, 50), (64, 200)):
+        got = irradiance_hessian(*_wall_strip_hemisphere(x0, h, m, n), far=1e4)[0]
+        errors.append(np.abs(got - want))
+    # the polygonal model converges at first order in the cell size
+    assert np.all(errors[1][[0, 2, 5]] < 0.5 * errors[0][[0, 2, 5]])
+    fine = errors[1]
+    assert fine[0] < 0.01 * want[0]                 # E within 1 %
+    assert fine[2] < 0.03 * abs(want[2])            # gradient within 3 %
+    assert fine[5] < 0.08 * abs(want[5])            # second derivative within 8 %
+    assert fine[1] < 0.01 and fine[3] < 0.01 and fine[4] < 0.01
+
+
+def test_hessian_of_an_open_sky_vanishes():
+    """Nothing but sky: the irradiance is the same everywhere, so no gradient and no curvature."""
+    from lbl_illum.hemisphere import irradiance_hessian
+
+    normals, d, _, _ = _wall_strip_hemisphere(1.0, 0.0, 16, 50)
+    out = irradiance_hessian(normals, d, np.ones(d.shape[:3]), np.full(d.shape[:3], np.inf), far=1e4)[0]
+    # the mesh leaves out the band below the last ring of centres, sin²θ > 1 − 1/(2M)
+    assert abs(out[0] - np.pi * (1.0 - 1.0 / 32)) < 0.005 * np.pi
+    assert np.abs(out[1:]).max() < 1e-6
+
+
+def test_hessian_radii_follow_the_eigenvalues_and_the_gradient():
+    """R = sqrt(2/(a|λ|)) along each eigenvector, R ≤ 1/|g·axis|, long ≤ 2 × short."""
+    from lbl_illum.hemisphere import MAX_ANISOTROPY, hessian_radii
+
+    a = 0.1
+    theta = 0.3                        # eigenvectors rotated by θ from the tangents
+    c, s = np.cos(theta), np.sin(theta)
+    lam1, lam2 = -8.0, 3.0             # relative curvatures [1/m²]; |λ1| is the larger
+    H = lam1 * np.outer([c, s], [c, s]) + lam2 * np.outer([-s, c], [-s, c])
+    E = 2.0
+    terms = np.array([[E, 0.0, 0.0, E * H[0, 0], E * H[0, 1], E * H[1, 1]]])
+    normal = np.array([[0.0, 0.0, 1.0]])          # tangents +x, +y
+    R_s, R_l, axis = hessian_radii(normal, terms, a)
+    assert np.isclose(R_s[0], np.sqrt(2 / (a * 8.0)))
+    assert np.isclose(R_l[0], np.sqrt(2 / (a * 3.0)))
+    assert np.isclose(abs(axis[0] @ [c, s, 0.0]), 1.0)
+    # a strong gradient across the short axis makes that axis the long-limited one
+    g = 1.0 / (0.5 * R_s[0])
+    terms_g = terms.copy()
+    terms_g[0, 1:3] = E * g * np.array([-s, c])
+    R_s2, R_l2, axis2 = hessian_radii(normal, terms_g, a)
+    assert np.isclose(R_s2[0], 0.5 * R_s[0]) and np.isclose(abs(axis2[0] @ [-s, c, 0.0]), 1.0)
+    assert np.isclose(R_l2[0], MAX_ANISOTROPY * R_s2[0])
+    # flat light: unlimited
+    flat = hessian_radii(normal, np.array([[1.0, 0, 0, 0, 0, 0]]), a)
+    assert np.isinf(flat[0][0]) and np.isinf(flat[1][0])
+
+
+def test_leak_sectors_flag_the_direction_of_a_nearby_wall_only():
+    """A wall 0.5 m away along +y (φ = 90° from the first tangent +x): the rays that leave
+    low towards it flag the sectors around 90°; out of reach, nothing is flagged."""
+    from lbl_illum.hemisphere import LEAK_SECTORS, leak_sectors
+
+    m, n = 8, 32
+    normals, d, _, t = _wall_strip_hemisphere(0.5, 10.0, m, n)
+    dirs, dist = d.reshape(1, -1, 3), t.reshape(1, -1)
+    axis = np.array([[1.0, 0.0, 0.0]])
+    mask = int(leak_sectors(normals, dirs, dist, np.array([1.0]), np.array([1.0]), axis, n)[0])
+    flagged = {s for s in range(LEAK_SECTORS) if mask >> s & 1}
+    width = 360.0 / LEAK_SECTORS
+    assert 90.0 // width in flagged
+    for s in flagged:                   # every flag is on the wall's side of the record
+        centre = (s + 0.5) * width
+        assert 0.0 < centre < 180.0
+    assert leak_sectors(normals, dirs, dist, np.array([0.3]), np.array([0.3]), axis, n)[0] == 0

@@ -25,9 +25,10 @@ def upper_half_reference(normals, E0=1000.0, rho=0.7):
     return E0 * s + rho * E0 * (1.0 - s) / 2.0
 
 
-def test_sphere_on_plane_upper_half_within_three_percent(sphere_scene):
+@pytest.mark.parametrize("interpolation", ["gradients", "hessian"])
+def test_sphere_on_plane_upper_half_within_three_percent(sphere_scene, interpolation):
     scene, points, normals = sphere_scene
-    result = compute_illuminance(scene, points, normals, Options(accuracy=0.1, bounces=1))
+    result = compute_illuminance(scene, points, normals, Options(accuracy=0.1, bounces=1, interpolation=interpolation))
     up = normals[:, 2] >= 0.0
     ref = upper_half_reference(normals[up])
     err = np.abs(result.illuminance[up] / ref - 1.0)
@@ -120,8 +121,10 @@ def test_more_bounces_add_light_and_converge_in_a_closed_box():
     assert E[2] - E[1] < E[1] - E[0]
 
 
-def test_same_room_in_millimetres_and_kilometres_gives_the_same_illuminance():
-    """Units are converted on reading; the engine's offsets scale with the geometry."""
+@pytest.mark.parametrize("interpolation", ["gradients", "hessian"])
+def test_same_room_in_millimetres_and_kilometres_gives_the_same_illuminance(interpolation):
+    """Units are converted on reading; the engine's offsets (and the Hessian's record
+    domains) scale with the geometry."""
     def room(factor, units):
         geo = [{"shape": "box", "center": [0, 0, 1.5 * factor], "size": [4 * factor, 6 * factor, 3 * factor],
                 "material": "wall"},
@@ -131,7 +134,7 @@ def test_same_room_in_millimetres_and_kilometres_gives_the_same_illuminance():
         return make_scene(geo, mats, units=units)
     pts = np.array([[0.0, 0.0, 0.8], [1.5, 2.5, 0.8]])
     nrm = np.array([[0, 0, 1.0], [0, 0, 1.0]])
-    opts = Options(bounces=2, samples=128)
+    opts = Options(bounces=2, samples=128, interpolation=interpolation)
     E_mm = compute_illuminance(room(1000.0, "mm"), pts, nrm, opts).illuminance
     E_km = compute_illuminance(room(0.001, "km"), pts, nrm, opts).illuminance
     assert np.allclose(E_mm, E_km, rtol=1e-6)

@@ -9,15 +9,26 @@ from lbl_illum.cache import LevelRecords
 from lbl_illum.octree import FRONT_TOLERANCE, MIN_ERROR
 
 
-def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None):
+def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None, W=None, leak=None):
     """Eqs. 5 and 6 evaluated for every (query, record) pair with numpy; with gradients,
-    record i contributes max(0, E_i + ∇_r E_i·(N_i × N) + ∇_t E_i·(P − P_i)) per channel."""
+    record i contributes max(0, E_i + ∇_r E_i·(N_i × N) + ∇_t E_i·(P − P_i)) per channel.
+    With ``W`` the distance is elliptical, sqrt(|d|² + (d·W_i)²), and a record is refused
+    in the sectors of its ``leak`` mask (angle of d from the first tangent of N_i)."""
     d = qP[:, None, :] - P[None, :, :]
     dist = np.linalg.norm(d, axis=2)
+    if W is not None:
+        dist = np.sqrt(dist ** 2 + np.einsum("qrk,rk->qr", d, W.astype(np.float64)) ** 2)
     ndot = np.minimum(qN @ N.T.astype(np.float64), 1.0)
     err = dist / R[None, :] + np.sqrt(1.0 - ndot)
     front = 0.5 * np.einsum("qrk,qrk->qr", d, qN[:, None, :] + N[None, :, :])
     inside = (err < a) & (front >= -FRONT_TOLERANCE * R[None, :])
+    if leak is not None:
+        from lbl_illum.hemisphere import LEAK_SECTORS, orthonormal_basis
+        t, b = orthonormal_basis(N.astype(np.float64))
+        u, v = np.einsum("qrk,rk->qr", d, t), np.einsum("qrk,rk->qr", d, b)
+        sector = np.floor(np.arctan2(v, u) * LEAK_SECTORS / (2 * np.pi)).astype(np.int64) % LEAK_SECTORS
+        closed = (leak.astype(np.int64)[None, :] >> sector) & 1 == 1
+        inside &= ~(closed & (u * u + v * v > 1e-6 * R[None, :].astype(np.float64) ** 2))
     w = np.where(inside, 1.0 / np.maximum(err, MIN_ERROR), 0.0)
     sw = w.sum(axis=1)
     Eq = np.broadcast_to(E.astype(np.float64)[None], d.shape)
@@ -197,3 +208,39 @@ def test_front_test_excludes_a_record_in_front_of_the_query():
     assert n[0] == 0
     _, _, n = lv.lookup(np.array([[0.02, 0.0, 0.1]]), np.array([[0, 0, 1.0]]))
     assert n[0] == 1
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n_rec=st.integers(1, 200), a=st.sampled_from([0.1, 0.3, 1.0]))
+def test_elliptical_domains_and_leak_sectors_equal_brute_force(seed, n_rec, a):
+    """Hessian-shaped records: the lookup returns the brute-force set and average."""
+    from lbl_illum.hemisphere import orthonormal_basis
+
+    rng = np.random.default_rng(seed)
+    P = rng.uniform(-1, 1, (n_rec, 3))
+    P[: n_rec // 2, 2] = 0.0
+    N = _unit(rng.normal(size=(n_rec, 3)))
+    N[: n_rec // 2] = [0, 0, 1]
+    R = 10 ** rng.uniform(-1.5, 0, n_rec)
+    t, b = orthonormal_basis(N)
+    ang = rng.uniform(0, 2 * np.pi, n_rec)
+    axis = np.cos(ang)[:, None] * t + np.sin(ang)[:, None] * b
+    W = (axis * np.sqrt(rng.uniform(0, 3, n_rec))[:, None]).astype(np.float32)
+    W[: n_rec // 4] = 0.0
+    leak = rng.integers(0, 2**32, n_rec, dtype=np.uint64).astype(np.uint32)
+    leak[rng.random(n_rec) < 0.5] = 0
+    N, R = N.astype(np.float32), R.astype(np.float32)
+    E = rng.uniform(0, 1000, (n_rec, 3)).astype(np.float32)
+    lv = LevelRecords(a, center=np.zeros(3), half=1.01, anisotropic=True)
+    lv.add(P, N, R, E, W=W, leak=leak)
+    near = P[rng.integers(0, n_rec, 300)] + rng.normal(scale=0.5, size=(300, 3)) * a * R[rng.integers(0, n_rec, 300), None]
+    qN = np.tile([0.0, 0.0, 1.0], (300, 1))
+    qN[150:] = _unit(rng.normal(size=(150, 3)))
+    count, sw, Ei = brute_force(near, qN, P, N, E, R, a, W=W, leak=leak)
+    E_oct, w_oct, n_oct = lv.lookup(near, qN)
+    assert np.array_equal(n_oct, count)
+    assert np.allclose(w_oct, sw, rtol=1e-4) and np.allclose(E_oct, Ei, rtol=1e-4, atol=1e-6)
+    # the same records without shapes admit at least as many
+    plain = LevelRecords(a, center=np.zeros(3), half=1.01)
+    plain.add(P, N, R, E)
+    assert np.all(plain.lookup(near, qN)[2] >= n_oct)
