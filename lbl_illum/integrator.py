@@ -172,8 +172,7 @@ def scene_fingerprint(scene: Scene, options: Options) -> str:
         h.update(np.ascontiguousarray(arr).tobytes())
     desc = {
         "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance) for m in scene.materials],
-        "sky": (scene.sky.name, scene.sky.horizontal_illuminance, scene.sky.ground_reflectance,
-                scene.sky.ground_luminance),
+        "sky": scene.sky.parameters,
         "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,
                                                scene.sun.direct_normal_illuminance),
         "options": (options.ambient, [options.level_accuracy(k) for k in range(options.bounces + 1)],

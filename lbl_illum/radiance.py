@@ -70,7 +70,7 @@ MESH_THRESHOLD = 20_000
 #: ``BRTDfunc`` with constant coefficients (exactly our angle-independent model).
 GLASS_MODELS = ("glass", "brtdfunc")
 #: Sky models of :mod:`lbl_illum.sky` and their selector (A1) in ``lbl_sky.cal``.
-SKY_MODEL_CODES = {"uniform": 1, "cie-overcast": 2}
+SKY_MODEL_CODES = {"uniform": 1, "cie-overcast": 2, "cie-general": 3, "perez": 4}
 #: Offset [m] of the two back-to-back copies of a ``light`` or ``mirror`` surface: Radiance
 #: draws both one-sided (the back of a light polygon emits nothing, the back of a
 #: mirror is black), ours are two-sided.  Larger than Radiance's intersection tolerance
@@ -208,28 +208,66 @@ def material_primitive(rad_name: str, material: Material, glass: str = "glass") 
 
 SKY_CAL = """\
 { lbl_sky.cal: the sky luminance models of lbl_illum (lbl_illum/sky.py), written by
-  lbl-illum export radiance.  Used as  void brightfunc skyfunc 2 lbl_sky lbl_sky.cal 0 3 A1 A2 A3
+  lbl-illum export radiance.  Used as  void brightfunc skyfunc 2 lbl_sky lbl_sky.cal 0 N A1 A2 ...
   on two glow hemispheres (sky above, ground below the horizon).
 
-  A1: model, 1 = uniform, 2 = cie-overcast (CIE traditional overcast, Moon & Spencer 1942)
-  A2: uniform: the sky radiance;  cie-overcast: the zenith radiance  [W/(sr m2)]
+  A1: model, 1 = uniform, 2 = cie-overcast (CIE traditional overcast, Moon & Spencer 1942),
+      3 = cie-general (ISO 15469 / CIE S 011), 4 = perez (Perez, Seals & Michalsky 1993)
+  A2: uniform: the sky radiance;  cie-overcast: the zenith radiance;
+      cie-general: L_z / (f(Z_s) phi(0));  perez: E_dh / integral(lv cos Z)  [W/(sr m2)]
   A3: ground radiance, rho_g E_gh / pi / 179, uniform below the horizon  [W/(sr m2)]
-  Dz: z component of the ray direction (+z up) = sin(altitude).
+  A4..A8: cie-general and perez: the coefficients a b c d e
+  A9..A11: cie-general and perez: unit vector towards the sun (+x east, +y north, +z up)
+  Dx, Dy, Dz: the ray direction; Dz = cos Z = sin(altitude).
   No blending of sky and ground at the horizon (unlike gensky's skybright.cal). }
 
 uniform_sky = A2;
 cie_overcast_sky = A2 * (1 + 2*Dz) / 3;
 
-sky_radiance = select(A1, uniform_sky, cie_overcast_sky);
-lbl_sky = if(Dz, sky_radiance, A3);
+{ angle chi between the ray and the sun (rayinit.cal names only A1..A10: arg(11) here) }
+clip1(x) = if(x - 1, 1, if(-1 - x, -1, x));
+cos_chi = clip1(Dx*arg(9) + Dy*arg(10) + Dz*arg(11));
+chi = acos(cos_chi);
+{ exp of an argument that may be hugely negative (b / cos Z near the horizon) }
+exp_neg(x) = if(x + 700, exp(x), 0);
+
+{ CIE general sky: gradation phi(Z) = 1 + a exp(b / cos Z), exactly 1 at the horizon;
+  indicatrix f(chi) = 1 + c (exp(d chi) - exp(d pi/2)) + e cos^2 chi }
+cie_gradation = if(Dz, 1 + A4 * exp_neg(A5 / Dz), 1);
+cie_indicatrix = 1 + A6 * (exp(A7 * chi) - exp(A7 * 1.5707963267948966)) + A8 * cos_chi * cos_chi;
+cie_general_sky = A2 * cie_gradation * cie_indicatrix;
+
+{ Perez all-weather sky: cos Z held at 0.01 or more (as perezlum.cal), negative values set to 0 }
+perez_cosz = if(Dz - 0.01, Dz, 0.01);
+perez_lv = (1 + A4 * exp_neg(A5 / perez_cosz)) * (1 + A6 * exp(A7 * chi) + A8 * cos_chi * cos_chi);
+perez_sky = A2 * if(perez_lv, perez_lv, 0);
+
+sky_radiance = select(A1, uniform_sky, cie_overcast_sky, cie_general_sky, perez_sky);
+{ z >= 0 is sky, as in lbl_illum }
+lbl_sky = if(-Dz, A3, sky_radiance);
 """
+
+
+def _sky_comment(sky) -> str:
+    """An ASCII line describing the sky for ``sky.rad``."""
+    text = f"{sky.name} sky"
+    if sky.name == "cie-general":
+        text += f" type {sky.sky_type}"
+    elif sky.name == "perez":
+        text += f" (epsilon {_g(sky.clearness)}, delta {_g(sky.brightness)})"
+    text += f", unobstructed horizontal illuminance {_g(sky.horizontal_illuminance)} lux"
+    if sky.sun_direction is not None:
+        text += f", sun at altitude {_g(sky.sun_altitude)} deg, azimuth {_g(sky.sun_azimuth)} deg"
+    return text
 
 
 def sky_description(sky, sun) -> tuple[str, str | None]:
     """``(sky.rad text, lbl_sky.cal text or None)`` for a :class:`~lbl_illum.sky.Sky` and
     an optional :class:`~lbl_illum.sun.Sun`.
 
-    Sky: ``void brightfunc skyfunc`` (``lbl_sky.cal``) modifying two ``glow`` s of unit
+    Sky: ``void brightfunc skyfunc`` (``lbl_sky.cal``, :data:`SKY_CAL`: the same formulas as
+    :mod:`lbl_illum.sky`, with the model's scale, coefficients and sun direction as real
+    arguments) modifying two ``glow`` s of unit
     colour on ``source`` hemispheres (solid angle 180°) towards +z and −z; the glows have
     no maximum radius, so they are not light sources of the direct calculation — the
     ambient (indirect) calculation samples them, as ours does (the paper's §5).
@@ -243,13 +281,19 @@ def sky_description(sky, sun) -> tuple[str, str | None]:
         if sky.name not in SKY_MODEL_CODES:
             raise ValueError(f"no Radiance version of sky model {sky.name!r}")
         code = SKY_MODEL_CODES[sky.name]
-        scale = sky.zenith_luminance if sky.name == "cie-overcast" else sky.horizontal_illuminance / math.pi
+        if sky.name in ("cie-general", "perez"):
+            scale = sky.luminance_scale
+            sun_dir = sky.sun_direction                     # None: a type that ignores the sun
+            extra = [*sky.coefficients, *(sun_dir if sun_dir is not None else (0.0, 0.0, 1.0))]
+        else:
+            scale = sky.zenith_luminance if sky.name == "cie-overcast" else sky.horizontal_illuminance / math.pi
+            extra = []
         A2, A3 = to_radiance(scale), to_radiance(sky.ground_luminance)
+        args = " ".join(_g(v) for v in (code, A2, A3, *extra))
         parts.append(
-            f"# {sky.name} sky, unobstructed horizontal illuminance {_g(sky.horizontal_illuminance)} lux; "
-            f"ground glow {_g(sky.ground_luminance)} cd/m2 "
+            f"# {_sky_comment(sky)}; ground glow {_g(sky.ground_luminance)} cd/m2 "
             f"(reflectance {_g(sky.ground_reflectance)})\n"
-            f"void brightfunc skyfunc\n2 lbl_sky {_CAL}\n0\n3 {code} {_g(A2)} {_g(A3)}\n\n"
+            f"void brightfunc skyfunc\n2 lbl_sky {_CAL}\n0\n{3 + len(extra)} {args}\n\n"
             "skyfunc glow sky_glow\n0\n0\n4 1 1 1 0\n\n"
             "sky_glow source sky\n0\n0\n4 0 0 1 180\n\n"
             "skyfunc glow ground_glow\n0\n0\n4 1 1 1 0\n\n"

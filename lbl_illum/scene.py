@@ -2,8 +2,10 @@
 
 A scene file (schema 1) has the top-level keys ``schema`` (optional, 1), ``units``
 (m, cm, mm, km, ft, in; default m), ``[[geometry]]`` entries, ``[materials.NAME]``
-tables, ``[sky]``, ``[sun]`` and ``[settings]``.  A geometry entry either loads a file
-(``file``, relative to the scene file, with a default ``material`` and a ``materials``
+tables, ``[sky]``, ``[sun]``, ``[site]`` and ``[settings]``.  The daylight tables
+(``[sky]``, ``[sun]``, ``[site]``, and a ``weather`` file named in ``[sky]``) are read by
+:func:`daylight_from_dict`; docs/daylight.md describes them.  A geometry entry either loads
+a file (``file``, relative to the scene file, with a default ``material`` and a ``materials``
 table mapping sub-mesh names to materials) or is a primitive (``shape`` = sphere, box,
 polygon or rectangle, with a required ``material``).  In a ``materials`` table a
 sub-mesh is found by, in this order, its glTF node name, its trimesh geometry name
@@ -19,6 +21,7 @@ or the line and column.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import re
 from dataclasses import dataclass, field
@@ -32,20 +35,23 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
-from .errors import InputError, check_keys, plural
+from .errors import InputError, check_keys, get_number, plural
 from .geometry import Triangles, degenerate_mask, duplicate_mask, load_mesh_file, shape_from_table
 from .materials import Material, MaterialTable, material_from_table
 from .options import Options
-from .sky import Sky, sky_from_table
-from .sun import Sun, sun_from_table
+from .sky import CIEGeneralSky, PerezSky, Sky, perez_sky_from_weather, sky_from_table
+from .solar import day_of_year, read_epw, site_from_table, solar_position, to_utc
+from .sun import Sun, sun_from_table, sun_position_at
 from .units import metres_per_unit
 
-__all__ = ["Scene", "load_scene", "scene_from_dict", "SCHEMA", "TOP_LEVEL_KEYS"]
+__all__ = ["Scene", "load_scene", "scene_from_dict", "daylight_from_dict", "SCHEMA", "TOP_LEVEL_KEYS"]
 
 #: The scene-file schema this version reads.
 SCHEMA = 1
 #: Keys allowed at the top of a scene file.
-TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "settings")
+TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "site", "settings")
+#: ``weather_values``: take the weather file's illuminances, or convert its irradiances.
+WEATHER_VALUES = ("illuminance", "irradiance")
 #: Keys of a ``[[geometry]]`` entry that loads a file.
 FILE_KEYS = ("file", "material", "materials")
 
@@ -133,11 +139,8 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     units = data.get("units", "m")
     scale = metres_per_unit(units, f"{where}: 'units'")
     materials = _materials(_table(data, "materials", where, "[materials]"), where)
-    sun = sun_from_table(_table(data, "sun", where, "[sun]"), f"{where}: [sun]")
-    sky = sky_from_table(_table(data, "sky", where, "[sky]"), f"{where}: [sky]",
-                         sun_horizontal_illuminance=float(sun.horizontal_illuminance) if sun else 0.0)
+    sun, sky, warnings = daylight_from_dict(data, base_dir, where)
     options = _options(_table(data, "settings", where, "[settings]"), f"{where}: [settings]", scale)
-    warnings = list(sun.warnings) if sun else []
     triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale,
                           {m.name: i for i, m in enumerate(materials)}, warnings)
     used = set(np.unique(triangles.material).tolist())
@@ -145,6 +148,128 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
                  for i, m in enumerate(materials) if i not in used]
     return Scene(triangles=triangles, materials=materials, sky=sky, sun=sun, options=options,
                  units=units, unit_scale=scale, warnings=warnings)
+
+
+# ---------------------------------------------------------------------------
+# Daylight: [sky], [sun], [site] and weather files
+# ---------------------------------------------------------------------------
+
+def daylight_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str
+                       ) -> tuple[Sun | None, Sky, list[str]]:
+    """The sun, the sky and warnings of a parsed scene file's ``[sky]``, ``[sun]`` and ``[site]``.
+
+    The sun that shapes a sky (CIE general, Perez) is positioned, in this order, by
+    ``[sun] altitude, azimuth``, by ``[sun] time`` or by ``[sky] time`` at the ``[site]``,
+    or by the ``[sky] time`` of a ``[sky] weather`` file at the file's site.  A sky
+    positioned by ``[sky] time`` without a ``[sun]`` table gets a sun with
+    ``direct_normal_illuminance = 0`` (it positions, but adds no light), except a Perez
+    sky, whose sun carries the sky's own direct normal illuminance.  ``weather`` is
+    relative to ``base_dir``.
+    """
+    sky_table = _table(data, "sky", where, "[sky]")
+    sun_table = _table(data, "sun", where, "[sun]")
+    site_table = _table(data, "site", where, "[site]")
+    sky_where, sun_where, site_where = f"{where}: [sky]", f"{where}: [sun]", f"{where}: [site]"
+    warnings: list[str] = []
+    if sky_table is not None and "weather" in sky_table:
+        return _weather_daylight(sky_table, sun_table, site_table, Path(base_dir), where, warnings)
+    if sky_table is not None and "weather_values" in sky_table:
+        raise InputError(f"{sky_where}: 'weather_values' goes with a 'weather' file")
+    site = None
+    if site_table is not None:
+        site = site_from_table(site_table, site_where)
+        if (w := site.meridian_warning(site_where)) is not None:
+            warnings.append(w)
+    sky_time = sky_table.get("time") if sky_table is not None else None
+    if sky_time is not None and sun_table is not None:
+        raise InputError(f"{sky_where}: 'time' and a [sun] table both position the sun: give the time in one of them")
+    if site is not None and sky_time is None and (sun_table is None or "time" not in sun_table):
+        warnings.append(f"{site_where}: not used (no 'time' in [sun] or [sky])")
+    position, day, utc = None, None, None
+    # the sun's position first: a Perez sky's direct normal value is the [sun]'s default
+    if sun_table is not None:
+        probe = sun_from_table(sun_table, sun_where, site, default_direct_normal=0.0, site_where="[site]")
+        position, utc = (probe.altitude, probe.azimuth), probe.time
+    elif sky_time is not None:
+        alt, az, utc = sun_position_at(sky_time, site, sky_where)
+        position = (alt, az)
+    if utc is not None:
+        day = day_of_year(utc)
+    sky = sky_from_table(sky_table, sky_where, sun_position=position, day=day, extra_keys=("time",))
+    if sun_table is not None:
+        default = sky.direct_normal_illuminance if isinstance(sky, PerezSky) else None
+        sun = sun_from_table(sun_table, sun_where, site, default_direct_normal=default, site_where="[site]")
+        if isinstance(sky, PerezSky) and "direct_normal_illuminance" in sun_table and \
+                sun.direct_normal_illuminance not in (0.0, sky.direct_normal_illuminance):
+            warnings.append(f"{sun_where}: direct_normal_illuminance {sun.direct_normal_illuminance:g} lux differs "
+                            f"from the Perez sky's {sky.direct_normal_illuminance:.6g} lux")
+    elif position is not None:
+        edn = sky.direct_normal_illuminance if isinstance(sky, PerezSky) else 0.0
+        sun = Sun(position[0], position[1] % 360.0, edn, time=utc)
+        if edn > 0.0 and position[0] <= 0.0:
+            sun = dataclasses.replace(sun, warnings=(f"{sky_where}: the sun is below the horizon (altitude "
+                                                      f"{position[0]:.4g}°): no direct sun",))
+    else:
+        sun = None
+    warnings += _sky_warnings(sky, sky_where)
+    if sun is not None:
+        warnings += list(sun.warnings)
+        if sun.horizontal_illuminance > 0.0:
+            sky = dataclasses.replace(sky, sun_horizontal_illuminance=float(sun.horizontal_illuminance))
+    return sun, sky, warnings
+
+
+def _sky_warnings(sky: Sky, where: str) -> list[str]:
+    if isinstance(sky, CIEGeneralSky) and sky.sun_altitude is not None and sky.sun_altitude < 0.0 \
+            and sky.sky_type not in (1, 3, 5):
+        return [f"{where}: the sun is below the horizon (altitude {sky.sun_altitude:.4g}°): the CIE general "
+                "sky is defined for a sun above it"]
+    if isinstance(sky, PerezSky) and sky.sun_altitude <= 0.0 and sky.horizontal_illuminance > 0.0:
+        return [f"{where}: the sun is below the horizon (altitude {sky.sun_altitude:.4g}°): the Perez sky "
+                "takes it at the horizon"]
+    return []
+
+
+def _weather_daylight(sky_table, sun_table, site_table, base_dir: Path, where: str, warnings: list[str]):
+    """``[sky] weather = "file.epw", time = "MM-DD HH:MM"``: a Perez sky and sun for one hour."""
+    sky_where = f"{where}: [sky]"
+    check_keys(sky_table, ("type", "weather", "time", "weather_values", "ground_reflectance"), sky_where,
+               required=("time",))
+    kind = sky_table.get("type", "perez")
+    if kind != "perez":
+        raise InputError(f"{sky_where}: a 'weather' file gives a Perez sky: 'type' must be \"perez\" (or left out), "
+                         f"got {kind!r}")
+    if site_table is not None:
+        raise InputError(f"{where}: [site] is not used with a weather file (the site is the file's LOCATION line)")
+    if sun_table is not None:
+        raise InputError(f"{where}: [sun] is not used with a weather file (the sun is the file's)")
+    file = sky_table["weather"]
+    if not isinstance(file, str) or not file:
+        raise InputError(f"{sky_where}: 'weather' must be a file name, got {file!r}")
+    values = sky_table.get("weather_values", "illuminance")
+    if values not in WEATHER_VALUES:
+        raise InputError(f"{sky_where}: 'weather_values' must be one of {', '.join(WEATHER_VALUES)}, got {values!r}")
+    rho = get_number(sky_table, "ground_reflectance", sky_where, default=0.2, minimum=0.0, maximum=1.0)
+    epw = read_epw(base_dir / file, f"{where}: [sky] weather {file}")
+    rec, local = epw.record_at(sky_table["time"], f"{sky_where} (weather {file})")
+    utc = to_utc(local, epw.site.time_zone)
+    pos = solar_position(utc, epw.site.latitude, epw.site.longitude, epw.site.elevation)
+    alt, az = float(pos.altitude), float(pos.azimuth) % 360.0
+    label = f"{where}: [sky] weather {file}: line {rec.line}"
+    try:
+        sky = perez_sky_from_weather(rec.direct_normal_irradiance, rec.diffuse_horizontal_irradiance,
+                                     rec.direct_normal_illuminance, rec.diffuse_horizontal_illuminance, (alt, az),
+                                     day=day_of_year(utc), dew_point=rec.dew_point,
+                                     use_file_illuminance=values == "illuminance", ground_reflectance=rho)
+    except ValueError as exc:
+        raise InputError(f"{label}: {exc}") from None
+    sun = Sun(alt, az, sky.direct_normal_illuminance, time=utc)
+    warnings += _sky_warnings(sky, sky_where)
+    if sun.direct_normal_illuminance > 0.0 and alt <= 0.0:
+        warnings.append(f"{label}: the sun is below the horizon (altitude {alt:.4g}°): no direct sun")
+    if sun.horizontal_illuminance > 0.0:
+        sky = dataclasses.replace(sky, sun_horizontal_illuminance=float(sun.horizontal_illuminance))
+    return sun, sky, warnings
 
 
 def _check_schema(data: Mapping[str, Any], where: str) -> None:

@@ -301,3 +301,142 @@ def test_type_and_value_errors_are_clean(change, message):
 def test_not_a_table():
     with raises(r"^s.toml: a scene must be a table"):
         scene_from_dict(["geometry"], Path("."), "s.toml")
+
+
+# -- daylight: [site], time, CIE general and Perez skies, weather files ----------------------------
+
+import datetime as dt
+import shutil
+
+from lbl_illum.sky import CIEGeneralSky, PerezSky
+from lbl_illum.solar import solar_position
+
+WEATHER = Path(__file__).parent / "data" / "berkeley_excerpt.epw"
+SITE = {"latitude": 37.876, "longitude": -122.247, "time_zone": -8, "elevation": 200}
+
+
+def test_sun_with_zero_direct_normal_positions_the_sky_only():
+    scene = scene_from_dict(minimal(sky={"type": "cie-clear", "horizontal_illuminance": 20000},
+                                    sun={"altitude": 30, "azimuth": 135, "direct_normal_illuminance": 0}),
+                            Path("."), "s.toml")
+    assert isinstance(scene.sky, CIEGeneralSky) and scene.sky.sky_type == 12
+    assert (scene.sky.sun_altitude, scene.sky.sun_azimuth) == (30, 135)
+    assert not scene.sun.is_up and scene.sky.sun_horizontal_illuminance == 0.0
+    assert scene.sky.ground_luminance == pytest.approx(0.2 * 20000 / np.pi)
+    assert scene.warnings == []
+
+
+def test_site_and_time_position_sky_and_sun():
+    time = "2024-06-21 10:00"
+    scene = scene_from_dict(minimal(site=SITE, sky={"type": "cie-general", "sky_type": 7},
+                                    sun={"time": time, "direct_normal_illuminance": 70000}), Path("."), "s.toml")
+    expect = solar_position(dt.datetime(2024, 6, 21, 18), 37.876, -122.247, 200)   # 10:00 PST = 18:00 UTC
+    assert scene.sun.altitude == pytest.approx(expect.altitude, abs=1e-9)
+    assert scene.sun.azimuth == pytest.approx(expect.azimuth, abs=1e-9)
+    assert scene.sun.time == dt.datetime(2024, 6, 21, 18)
+    assert (scene.sky.sun_altitude, scene.sky.sun_azimuth) == (scene.sun.altitude, scene.sun.azimuth)
+    assert scene.sky.sun_horizontal_illuminance == pytest.approx(scene.sun.horizontal_illuminance)
+    # the same instant in UTC, and a [sky] time without [sun]: a sun that only positions
+    utc = scene_from_dict(minimal(site=SITE, sky={"type": "cie-general", "sky_type": 7, "time": "2024-06-21 18:00Z"}),
+                          Path("."), "s.toml")
+    assert utc.sun.altitude == pytest.approx(scene.sun.altitude, abs=1e-9)
+    assert utc.sun.direct_normal_illuminance == 0.0 and not utc.sun.is_up
+
+
+def test_perez_sky_in_a_scene_brings_its_sun():
+    sky = {"type": "perez", "direct_normal_irradiance": 700, "diffuse_horizontal_irradiance": 110, "dew_point": 12,
+           "time": "2024-06-21 12:00"}
+    scene = scene_from_dict(minimal(site=SITE, sky=sky), Path("."), "s.toml")
+    assert isinstance(scene.sky, PerezSky) and scene.sun.is_up
+    assert scene.sun.direct_normal_illuminance == scene.sky.direct_normal_illuminance > 50000
+    assert scene.sky.sun_horizontal_illuminance == pytest.approx(scene.sun.horizontal_illuminance)
+    # a [sun] positions it instead; without direct_normal_illuminance the sky's value is used, 0 turns it off
+    sky.pop("time")
+    for sun, edn in (({"altitude": 50, "azimuth": 180}, scene.sky.direct_normal_illuminance),
+                     ({"altitude": 50, "azimuth": 180, "direct_normal_illuminance": 0}, 0.0)):
+        s = scene_from_dict(minimal(sky=sky, sun=sun), Path("."), "s.toml")
+        assert s.sky.sun_altitude == 50 and s.sun.direct_normal_illuminance == pytest.approx(edn, rel=0.05)
+
+
+def test_weather_file_hour(tmp_path):
+    shutil.copy(WEATHER, tmp_path / "site.epw")
+    path = write(tmp_path, 'units = "m"\n[[geometry]]\nshape = "rectangle"\norigin = [0, 0, 0]\nu = [1, 0, 0]\n'
+                           'v = [0, 1, 0]\nmaterial = "g"\n[materials.g]\ntype = "diffuse"\nreflectance = 0.2\n'
+                           '[sky]\nweather = "site.epw"\ntime = "06-20 11:30"\n')
+    scene = load_scene(path)
+    assert isinstance(scene.sky, PerezSky)
+    # EPW hour 12 of 20 June (11:00–12:00 PST), sun at 11:30 PST = 19:30 UTC
+    assert scene.sky.horizontal_illuminance == 15442 and scene.sun.direct_normal_illuminance == 90294
+    assert scene.sun.time == dt.datetime(1999, 6, 20, 19, 30)
+    expect = solar_position(dt.datetime(1999, 6, 20, 19, 30), 37.876, -122.247, 200)
+    assert scene.sky.sun_altitude == pytest.approx(expect.altitude, abs=1e-9)
+    assert 1.065 < scene.sky.clearness and scene.sky.brightness > 0
+    # irradiance converted by the Perez efficacy model instead of the file's illuminance
+    text = path.read_text().replace('time = "06-20 11:30"', 'time = "06-20 11:30"\nweather_values = "irradiance"')
+    conv = load_scene(write(tmp_path, text, "conv.toml"))
+    assert conv.sky.horizontal_illuminance == pytest.approx(15442, rel=0.01)   # the file was made that way
+    # the overcast day: no direct sun
+    night = load_scene(write(tmp_path, path.read_text().replace("06-20 11:30", "06-21 12:00"), "o.toml"))
+    assert night.sun.direct_normal_illuminance == 0.0 and night.sky.clearness == 1.0
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"sky": {"type": "cie-general", "sky_type": 0}}, r"\[sky\]: 'sky_type' must be a whole number 1…15, got 0$"),
+    ({"sky": {"type": "cie-clear", "time": "2024-06-21 12:00"}}, r"\[sky\]: 'time' needs a \[site\] table"),
+    ({"site": {"latitude": 40}, "sky": {"type": "cie-clear", "time": "2024-06-21 12:00"}},
+     r"\[site\]: missing key 'longitude'$"),
+    ({"site": {"latitude": 40, "longitude": -105}, "sky": {"type": "cie-clear", "time": "2024-06-21 12:00"}},
+     r"\[sky\]: 'time' 2024-06-21 12:00 is local standard time: \[site\] needs 'time_zone'"),
+    ({"site": SITE, "sky": {"type": "cie-clear", "time": "June 21"}}, r"\[sky\]: 'time' must look like"),
+    ({"site": SITE, "sky": {"type": "cie-clear", "time": "2024-06-21 12:00"},
+      "sun": {"altitude": 30, "azimuth": 0, "direct_normal_illuminance": 0}}, r"\[sky\]: 'time' and a \[sun\] table"),
+    ({"site": SITE, "sun": {"time": "2024-06-21 12:00", "altitude": 3, "direct_normal_illuminance": 0}},
+     r"\[sun\]: give the sun's position by 'altitude' and 'azimuth' or by 'time', not both"),
+    ({"sky": {"type": "cie-clear"}}, r"\[sky\]: CIE general sky type 12 needs the sun's position"),
+    ({"sky": {"weather": "x.epw", "time": "06-21 12:00", "type": "cie-clear"}}, r"\[sky\]: a 'weather' file gives "
+                                                                                  r"a Perez sky"),
+    ({"sky": {"weather": "x.epw"}}, r"\[sky\]: missing key 'time'"),
+    ({"sky": {"weather": "x.epw", "time": "06-21 12:00"}, "site": SITE}, r"\[site\] is not used with a weather"),
+    ({"sky": {"weather": "x.epw", "time": "06-21 12:00", "weather_values": "lux"}},
+     r"\[sky\]: 'weather_values' must be one"),
+    ({"sky": {"type": "cie-overcast", "weather_values": "lux"}},
+     r"\[sky\]: 'weather_values' goes with a 'weather' file"),
+    ({"sky": {"weather": "x.epw", "time": "06-21 12:00"}}, r"\[sky\] weather x.epw: no such weather file"),
+])
+def test_daylight_errors(change, message):
+    with raises(rf"^s.toml: {message}") as exc:
+        scene_from_dict(minimal(**change), Path("."), "s.toml")
+    assert "\n" not in str(exc.value)
+
+
+def test_weather_errors_name_file_and_line(tmp_path):
+    lines = WEATHER.read_text().splitlines()
+    lines[29] = lines[29].replace(",60,", ",sixty,", 1)
+    (tmp_path / "bad.epw").write_text("\n".join(lines) + "\n")
+    sky = {"weather": "bad.epw", "time": "06-20 12:00"}
+    with raises(r"^s.toml: \[sky\] weather bad.epw: line 30: field 5 \(minute\) must be a number, got 'sixty'$"):
+        scene_from_dict(minimal(sky=sky), tmp_path, "s.toml")
+    shutil.copy(WEATHER, tmp_path / "ok.epw")
+    with raises(r"^s.toml: \[sky\] \(weather ok.epw\): 'time' '01-15 12:00': no such hour in ok.epw \(the file "
+                r"runs from 06-20 hour 1 to 12-21 hour 24\)$"):
+        scene_from_dict(minimal(sky={"weather": "ok.epw", "time": "01-15 12:00"}), tmp_path, "s.toml")
+
+
+def test_site_warnings():
+    scene = scene_from_dict(minimal(site=dict(SITE, longitude=122.247), sky={"type": "cie-clear", "time":
+                                                                             "2024-06-21 12:00"}),
+                            Path("."), "s.toml")
+    assert any("west longitudes are negative" in w for w in scene.warnings)
+    unused = scene_from_dict(minimal(site=SITE), Path("."), "s.toml")
+    assert unused.warnings == ["s.toml: [site]: not used (no 'time' in [sun] or [sky])"]
+    night = scene_from_dict(minimal(site=SITE, sky={"type": "cie-clear", "time": "2024-06-21 23:00"}),
+                            Path("."), "s.toml")
+    assert any("CIE general sky is defined for a sun above it" in w for w in night.warnings)
+
+
+def test_office_clear_sky_example_loads():
+    from conftest import EXAMPLES
+
+    scene = load_scene(EXAMPLES / "office" / "office_clear_sky.toml")
+    assert isinstance(scene.sky, CIEGeneralSky) and scene.sky.sky_type == 12 and scene.sun.is_up
+    assert scene.warnings == []
