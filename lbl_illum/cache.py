@@ -238,6 +238,18 @@ class LevelRecords:
                           out_E, out_w, out_n, parallel)
         return out_E, out_w, out_n
 
+    def covers(self, P, N) -> np.ndarray:
+        """(n,) bool: whether any record serves each query — ``lookup(P, N)[2] > 0``,
+        found faster when most queries meet few records (:func:`octree.covered`)."""
+        P = np.ascontiguousarray(P, np.float64).reshape(-1, 3)
+        N = np.ascontiguousarray(N, np.float64).reshape(-1, 3)
+        out = np.zeros(len(P), bool)
+        if len(P) and self.count and self.accuracy > 0:
+            parallel = len(P) >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
+            octree.covered(P, N, self.freeze(), self._values, self.leak, self.anisotropic, self.accuracy, out,
+                           parallel)
+        return out
+
     def freeze(self) -> octree.Layout:
         """The lookup layout of :func:`octree.freeze`, rebuilt only after insertions."""
         if self._frozen is None or self._frozen[0] != self._tree_version:

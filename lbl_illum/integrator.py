@@ -620,8 +620,7 @@ class Integrator:
             self._tick()
             return pending, idx
         if lv.count:
-            _, _, count = lv.lookup(P, Ns)
-            todo = np.flatnonzero(count == 0)
+            todo = np.flatnonzero(~lv.covers(P, Ns))
         else:
             todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
@@ -648,8 +647,7 @@ class Integrator:
                                      anisotropic=lv.anisotropic)
                 fresh.add(pP, pN, R, W=W, leak=leak)
                 idx = np.flatnonzero(keep)
-                _, _, count = fresh.lookup(tP[idx], tN[idx])
-                keep[idx[count > 0]] = False
+                keep[idx[fresh.covers(tP[idx], tN[idx])]] = False
             todo, tP, tN, band = _compact(keep, todo, tP, tN, band)
             cell *= 0.5
             self._tick()

@@ -54,7 +54,7 @@ from .compiled import serial_and_parallel
 from .hemisphere import LEAK_SECTORS
 
 __all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "MIN_ERROR", "LANES", "Layout", "insert_records", "freeze",
-           "query_order", "lookup"]
+           "query_order", "lookup", "covered"]
 
 #: Records at most this far (relative to R_i) behind the query's tangent plane still count as level.
 FRONT_TOLERANCE = 1e-3
@@ -579,6 +579,81 @@ def _lookup(qP, qN, order, n_blocks, accuracy, gradients, shaped, V, leak, perm,
 
 
 _lookup_kernels = serial_and_parallel(_lookup)
+
+
+def _covered(qP, qN, accuracy, shaped, V, leak, perm, pos, nr, box, level_start, out):
+    """Compiled body of :func:`covered`: each query walks the box tree alone, depth
+    first, and stops at the first record that serves it."""
+    n_levels = level_start.shape[0] - 1
+    root = level_start[n_levels - 1]
+    for q in prange(qP.shape[0]):
+        px, py, pz = qP[q, 0], qP[q, 1], qP[q, 2]
+        nx, ny, nz = qN[q, 0], qN[q, 1], qN[q, 2]
+        xlo, xhi = _f32_below(px), _f32_above(px)
+        ylo, yhi = _f32_below(py), _f32_above(py)
+        zlo, zhi = _f32_below(pz), _f32_above(pz)
+        found = False
+        stack = np.empty(LANES * (n_levels + 1), np.int64)
+        top = 0
+        if ((box[root, 0, 0] <= xhi) & (box[root, 3, 0] >= xlo) & (box[root, 1, 0] <= yhi)
+                & (box[root, 4, 0] >= ylo) & (box[root, 2, 0] <= zhi) & (box[root, 5, 0] >= zlo)):
+            stack[0] = (n_levels - 1) << 48
+            top = 1
+        while top > 0 and not found:
+            top -= 1
+            lev = stack[top] >> 48
+            node = stack[top] & 0xFFFFFFFFFFFF
+            g = level_start[lev - 1] + node           # the group of its children
+            for t in range(LANES):
+                if not ((box[g, 0, t] <= xhi) & (box[g, 3, t] >= xlo) & (box[g, 1, t] <= yhi)
+                        & (box[g, 4, t] >= ylo) & (box[g, 2, t] <= zhi) & (box[g, 5, t] >= zlo)):
+                    continue
+                if lev > 1:
+                    stack[top] = ((lev - 1) << 48) | (node * LANES + t)
+                    top += 1
+                    continue
+                j0 = (node * LANES + t) * LANES      # a chunk: its records
+                for j in range(j0, j0 + LANES):
+                    dx = px - pos[0, j]
+                    dy = py - pos[1, j]
+                    dz = pz - pos[2, j]
+                    Ri = np.float64(nr[3, j])
+                    d2 = dx * dx + dy * dy + dz * dz
+                    if not d2 <= (accuracy * Ri) ** 2 * (1.0 + 1e-9):
+                        continue                      # (NaN padding fails here too)
+                    mx = np.float64(nr[0, j])
+                    my = np.float64(nr[1, j])
+                    mz = np.float64(nr[2, j])
+                    ok = True
+                    if shaped:
+                        i = perm[j]
+                        dw = dx * V[i, 7, 0] + dy * V[i, 7, 1] + dz * V[i, 7, 2]
+                        d2 += dw * dw
+                        if leak[i] != 0:
+                            ok = _sector_open(leak[i], dx, dy, dz, mx, my, mz, Ri)
+                    ndot = min(nx * mx + ny * my + nz * mz, 1.0)
+                    err = np.sqrt(d2) / Ri + np.sqrt(1.0 - ndot)
+                    front = 0.5 * (dx * (nx + mx) + dy * (ny + my) + dz * (nz + mz))
+                    if ok and err < accuracy and front >= -FRONT_TOLERANCE * Ri:
+                        found = True
+                        break
+                if found:
+                    break
+        out[q] = found
+
+
+_covered_kernels = serial_and_parallel(_covered)
+
+
+def covered(qP, qN, layout: Layout, V, leak, shaped, accuracy, out, parallel):
+    """Whether any record serves each query (``count > 0`` of :func:`lookup`, exactly).
+
+    For placement, where most queries meet few records: each query walks the box tree
+    on its own (no sort, no packets) and stops at the first record that passes Eqs. 5
+    and 6 (elliptical, and outside its leak sectors, when ``shaped``).  ``out``: (q,) bool.
+    """
+    _covered_kernels[bool(parallel)](qP, qN, accuracy, bool(shaped), V, leak, layout.perm, layout.pos, layout.nr,
+                                     layout.box, layout.level_start, out)
 
 
 def lookup(qP, qN, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel):

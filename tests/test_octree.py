@@ -244,3 +244,32 @@ def test_elliptical_domains_and_leak_sectors_equal_brute_force(seed, n_rec, a):
     plain = LevelRecords(a, center=np.zeros(3), half=1.01)
     plain.add(P, N, R, E)
     assert np.all(plain.lookup(near, qN)[2] >= n_oct)
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n_rec=st.integers(1, 400), a=st.sampled_from([0.05, 0.3, 1.0]),
+       shaped=st.booleans())
+def test_covers_is_exactly_a_nonzero_lookup_count(seed, n_rec, a, shaped):
+    """The placement's coverage test finds a serving record exactly when the lookup does."""
+    from lbl_illum.hemisphere import orthonormal_basis
+
+    rng = np.random.default_rng(seed)
+    P = rng.uniform(-1, 1, (n_rec, 3))
+    P[: n_rec // 2, 2] = 0.0
+    N = _unit(rng.normal(size=(n_rec, 3)))
+    N[: n_rec // 2] = [0, 0, 1]
+    R = (10 ** rng.uniform(-1.5, 0.5, n_rec)).astype(np.float32)
+    lv = LevelRecords(a, center=np.zeros(3), half=1.01, anisotropic=shaped)
+    shape = {}
+    if shaped:
+        t, _ = orthonormal_basis(N)
+        shape = {"W": (t * rng.uniform(0, 2, (n_rec, 1))).astype(np.float32),
+                 "leak": np.where(rng.random(n_rec) < 0.5, 0, rng.integers(0, 2**32, n_rec, dtype=np.uint64))
+                 .astype(np.uint32)}
+    lv.add(P, N.astype(np.float32), R, **shape)
+    qP = np.vstack([P[rng.integers(0, n_rec, 5000)] + rng.normal(scale=0.2, size=(5000, 3)),
+                    rng.uniform(-2, 2, (2000, 3))])
+    qN = np.tile([0.0, 0.0, 1.0], (len(qP), 1))
+    qN[3000:] = _unit(rng.normal(size=(len(qP) - 3000, 3)))
+    assert np.array_equal(lv.covers(qP, qN), lv.lookup(qP, qN)[2] > 0)
+    assert np.array_equal(lv.covers(qP[:100], qN[:100]), lv.lookup(qP[:100], qN[:100])[2] > 0)   # serial
