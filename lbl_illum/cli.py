@@ -1,5 +1,5 @@
-"""Command line: ``lbl-illum illuminance SCENE --points PTS -o OUT``, ``lbl-illum validate``
-and ``lbl-illum export radiance SCENE DIR``.
+"""Command line: ``lbl-illum illuminance``, ``daylight-factor``, ``grid``, ``view``, ``validate``
+and ``export radiance``.
 
 The command line only parses arguments and calls the library.  Bad input ends with
 one line on standard error naming the file, line or key, exit status 2 and no
@@ -11,12 +11,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import textwrap
 import time
 from pathlib import Path
 
 from . import __version__
 from .errors import InputError
-from .options import PRESETS, preset_table
+from .options import INTERPOLATIONS, PRESETS, Options, preset_table
 
 __all__ = ["main"]
 
@@ -88,6 +89,56 @@ def _studies():
     return lbl_illum_studies
 
 
+def _add_quality_options(p) -> None:
+    """The quality options shared by ``illuminance`` and ``daylight-factor``; the defaults
+    shown are those of :class:`~lbl_illum.options.Options`."""
+    d = Options()
+    q = p.add_argument_group("quality")
+    q.add_argument("--preset", choices=tuple(PRESETS), metavar="NAME",
+                   help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it)")
+    q.add_argument("--accuracy", type=_number, metavar="A",
+                   help=f"the paper's a (default {d.accuracy:g}; 0 = no interpolation)")
+    q.add_argument("--bounces", type=_positive_int, metavar="N",
+                   help=f"diffuse reflections followed (default {d.bounces})")
+    q.add_argument("--samples", type=_positive_int, metavar="N",
+                   help=f"hemisphere samples of a first-level primary evaluation of the cache (default {d.samples})")
+    q.add_argument("--point-samples", type=_positive_int, metavar="N",
+                   help="evaluate every point on its own with N hemisphere samples; the cache starts at the "
+                        f"first reflection (default {d.point_samples or 'off'}; 0 = off)")
+    q.add_argument("--ambient", type=_number, metavar="E",
+                   help=f"illuminance [lux] at the bounce limit (default {d.ambient:g})")
+    q.add_argument("--min-spacing", type=_number, metavar="D", help="lower clamp on record R_i [scene units]")
+    q.add_argument("--max-spacing", type=_number, metavar="D", help="upper clamp on record R_i [scene units]")
+    q.add_argument("--no-bounce-scaling", action="store_true",
+                   help="keep a and samples the same at every level (§3.4 scaling off)")
+    q.add_argument("--seed", type=_positive_int, metavar="S", help=f"random seed (default {d.seed})")
+    q.add_argument("--interpolation", choices=INTERPOLATIONS,
+                   help="paper: Eq. 5 as published; gradients: over values extrapolated by each record's "
+                        "irradiance gradients (Ward & Heckbert 1992); hessian: that with elliptical record "
+                        "domains from the irradiance Hessian and leak checks (Schwarzhaupt et al. 2012) "
+                        f"(default {d.interpolation})")
+
+
+def _add_file_options(p) -> None:
+    """Cache and statistics files, shared by ``illuminance`` and ``daylight-factor``."""
+    r = p.add_argument_group("files")
+    r.add_argument("--cache", metavar="FILE", help="read records from FILE if it exists; write all records back")
+    r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
+
+
+def _add_report_options(p, thresholds: str, unit: str) -> None:
+    """Summary thresholds, plan and 3-D view, shared by ``illuminance`` and ``daylight-factor``."""
+    g = p.add_argument_group("summary and pictures", textwrap.fill(
+        "Every run writes OUT's name with .summary.json (mean, min, max, U0 = min/mean, min/max and the share of "
+        "points at or above each threshold, overall and per named area) and prints its overall figures.", 88))
+    unit = unit.replace("%", "%%")
+    g.add_argument("--thresholds", nargs="+", type=_number, metavar="T",
+                   help=f"thresholds [{unit}] for the shares of points at or above them (default {thresholds})")
+    g.add_argument("--plot", metavar="PLAN", help="false-colour plan of the grid (.png, .pdf or .svg; matplotlib)")
+    g.add_argument("--view3d", metavar="SHOT", help="3-D view of the room with the points coloured, written off "
+                   "screen (.png; pyvista)")
+
+
 def _build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="lbl-illum", description="Illuminance in daylit rooms by the irradiance cache of "
                      "Ward, Rubinstein & Clear (1988).")
@@ -102,29 +153,60 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts)")
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    help=".csv (x,y,z,nx,ny,nz,illuminance,direct,indirect) or .txt (one value per line)")
-    q = p.add_argument_group("quality")
-    q.add_argument("--preset", choices=tuple(PRESETS), metavar="NAME",
-                   help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it)")
-    q.add_argument("--accuracy", type=_number, metavar="A", help="the paper's a (default 0.1; 0 = no interpolation)")
-    q.add_argument("--bounces", type=_positive_int, metavar="N", help="diffuse reflections followed (default 8)")
-    q.add_argument("--samples", type=_positive_int, metavar="N",
-                   help="hemisphere samples of a first-level primary evaluation (default 1024)")
-    q.add_argument("--point-samples", type=_positive_int, metavar="N",
-                   help="evaluate every point on its own with N hemisphere samples; the cache starts at the "
-                        "first reflection (for sparse sensor grids)")
-    q.add_argument("--ambient", type=_number, metavar="E", help="illuminance [lux] at the bounce limit (default 0)")
-    q.add_argument("--min-spacing", type=_number, metavar="D", help="lower clamp on record R_i [scene units]")
-    q.add_argument("--max-spacing", type=_number, metavar="D", help="upper clamp on record R_i [scene units]")
-    q.add_argument("--no-bounce-scaling", action="store_true",
-                   help="keep a and samples the same at every level (§3.4 scaling off)")
-    q.add_argument("--seed", type=_positive_int, metavar="S", help="random seed (default 0)")
-    q.add_argument("--interpolation", choices=("paper", "gradients"),
-                   help="Eq. 5 as published, or over values extrapolated by each record's irradiance "
-                        "gradients (Ward & Heckbert 1992; default)")
-    r = p.add_argument_group("files")
-    r.add_argument("--cache", metavar="FILE", help="read records from FILE if it exists; write all records back")
-    r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
+    _add_quality_options(p)
+    _add_file_options(p)
+    _add_report_options(p, "300 500", "lux")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+
+    d = sub.add_parser("daylight-factor", help="daylight factor at sensor points (CIE overcast sky)",
+                       description=textwrap.fill(
+                           "Compute the daylight factor DF = 100 E / E_h [%] at the sensor points under a CIE "
+                           "overcast sky that replaces the scene's sky and sun.  E_h, the illuminance on an "
+                           "unobstructed horizontal plane, is integrated from the sky model, not assumed.", 88),
+                       epilog=QUALITY_HELP + preset_table(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    d.add_argument("scene", help="scene file (.toml)")
+    d.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts, optional area name column)")
+    d.add_argument("-o", "--output", required=True, metavar="OUT",
+                   help=".csv (x,y,z,nx,ny,nz,daylight_factor,illuminance,direct,indirect) or .txt (DF per line)")
+    d.add_argument("--sky-illuminance", type=_number, default=10000.0, metavar="E",
+                   help="horizontal illuminance of the overcast sky [lux] (default 10000; DF does not depend on it)")
+    d.add_argument("--ground-reflectance", type=_number, metavar="R",
+                   help="reflectance of the ground below the horizon (default: the scene's [sky] value, else 0.2)")
+    _add_quality_options(d)
+    _add_file_options(d)
+    _add_report_options(d, "2", "%")
+    d.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+
+    g = sub.add_parser("grid", help="workplane sensor points over the floor or named surfaces",
+                       description="Write sensor points at a height above the floor (the lowest horizontal "
+                       "surfaces with a ceiling or roof above them) or above the horizontal triangles of the named "
+                       "materials, normals up, on a lattice centred in each area with the EN 12464-1 spacing "
+                       "p = 0.2 x 5^log10(d) (d the longer side of the area less the margin, p <= 10 m).  Points "
+                       "inside columns and within the margin of walls are left out.  Lengths in the scene's units.",
+                       epilog="See docs/workplane.md for the rules.")
+    g.add_argument("scene", help="scene file (.toml)")
+    g.add_argument("-o", "--output", required=True, metavar="PTS", help="sensor points to write (.pts)")
+    g.add_argument("--height", type=_number, metavar="H", help="height above the surface (default 0.8 m)")
+    g.add_argument("--spacing", type=_number, metavar="S", help="largest spacing (default: EN 12464-1 rule)")
+    g.add_argument("--margin", type=_number, metavar="M", help="band along edges and walls without points "
+                   "(default 0.5 m)")
+    g.add_argument("--surface", action="append", metavar="MATERIAL", help="lay the grid on this material's "
+                   "horizontal triangles, as an area of that name (repeat for several areas)")
+    g.add_argument("--align", choices=("auto", "scene"), default="auto",
+                   help="grid axes: each area's outline direction (auto, default) or the scene's x and y")
+    g.add_argument("--no-names", action="store_true", help="six columns only (no area name column)")
+    g.add_argument("--plot", metavar="PLAN", help="plan of the points and the room (.png, .pdf or .svg)")
+    g.add_argument("-q", "--quiet", action="store_true", help="no summary line")
+
+    w = sub.add_parser("view", help="3-D view of a scene and its results",
+                       description="Show the scene in 3-D (pyvista) with sensor points coloured by result: in a "
+                       "window, or off screen into a PNG file with --screenshot.  Ceilings above the points are "
+                       "left out and the surfaces drawn semi-transparent.")
+    w.add_argument("scene", help="scene file (.toml)")
+    w.add_argument("--results", metavar="FILE", help="results .csv of illuminance or daylight-factor (coloured "
+                   "by daylight_factor, else illuminance) or a .pts file (points only)")
+    w.add_argument("--screenshot", metavar="PNG", help="write the view to this .png file instead of a window")
+    w.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
     try:
         STUDIES = _studies().STUDIES
@@ -171,27 +253,51 @@ studies:
 """
 
 
-def _run_illuminance(args) -> int:
-    t0 = time.perf_counter()
-    from .cache import IrradianceCache
-    from .integrator import Integrator
-    from .photometry import luminance
-    from .scene import load_scene
-    from .files import atomic_write_text
-    from .sensors import check_output_path, read_points, write_results
+class RunError(Exception):
+    """A failure that is not bad input (e.g. no OpenGL for a 3-D view): one line, exit 1."""
+
+
+def _summary_path(output) -> Path:
+    """Where a run's summary goes: OUT with its extension replaced by ``.summary.json``."""
+    return Path(output).with_suffix(".summary.json")
+
+
+def _check_run_files(args) -> None:
+    """Refuse every bad output path before any work, so bad input leaves no file behind."""
+    from .plots import check_plot_path
+    from .sensors import check_output_path
 
     check_output_path(args.output)
     for extra in (args.stats, args.cache):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
-    scene = load_scene(args.scene)
+    if args.plot:
+        check_plot_path(args.plot)
+    if args.view3d:
+        from .view3d import check_view_path
+
+        check_view_path(args.view3d)
+    if args.thresholds is not None and not args.thresholds:
+        raise InputError("--thresholds: give at least one value")
+
+
+def _run_options(scene, args):
+    """The scene's [settings], then the preset, then the options given on the command line."""
     options = scene.options.with_preset(args.preset) if args.preset else scene.options
-    options = options.replace(
+    return options.replace(
         accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
         min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
         interpolation=args.interpolation, point_samples=args.point_samples,
         bounce_scaling=False if args.no_bounce_scaling else None)
-    points, normals = read_points(args.points, scene.unit_scale)
+
+
+def _compute(scene, args, points, normals):
+    """Run the integrator with the options, cache file and progress bar of ``args``:
+    (result, integrator, options)."""
+    from .cache import IrradianceCache
+    from .integrator import Integrator
+
+    options = _run_options(scene, args)
     if not args.quiet:
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
@@ -203,35 +309,241 @@ def _run_illuminance(args) -> int:
         result = integ.compute(points, normals)
     finally:
         bar.close()
+    return result, integ, options
+
+
+def _write_stats(args, scene, result, options, seconds, values: dict) -> None:
+    """``--stats``: what the run did and its effective settings, as JSON."""
+    from .files import atomic_write_text
+
+    stats = result.stats
+    doc = {
+        "points": len(result.rgb),
+        "records": stats.records,
+        "new_records": stats.new_records,
+        "primary_evaluations": stats.primary_evaluations,
+        "cache_hits": stats.cache_hits,
+        "queries": stats.queries,
+        "rays": stats.rays,
+        "seconds": seconds,
+        "compute_seconds": stats.seconds,
+        **{key: {"mean": float(v.mean()), "min": float(v.min()), "max": float(v.max())} for key, v in values.items()},
+        "settings": {**options.as_dict(),
+                     "min_spacing": stats.min_spacing / scene.unit_scale,
+                     "max_spacing": stats.max_spacing / scene.unit_scale,
+                     "units": scene.units},
+    }
+    atomic_write_text(args.stats, json.dumps(doc, indent=2) + "\n")
+
+
+def _report(args, scene, points, values, areas, quantity: str, unit: str, thresholds, extra: dict) -> dict:
+    """Write the summary JSON, the plan and the 3-D view of a run; return the summary.
+
+    points : (n, 3) [m];  values : (n,) in ``unit``;  areas : (n,) names.
+    """
+    import numpy as np
+
+    from .files import atomic_write_text
+    from .metrics import grid_summary
+
+    doc = grid_summary(values, thresholds, areas, quantity=quantity.lower().replace(" ", "_"), unit=unit)
+    doc = {"command": args.command, "scene": str(args.scene), "points_file": str(args.points),
+           "output": str(args.output), **extra, **doc}
+    atomic_write_text(_summary_path(args.output), json.dumps(doc, indent=2) + "\n")
+    if args.plot:
+        from .grid import plan_outline
+        from .plots import plan_plot
+
+        walls, glazing = plan_outline(scene, float(np.median(points[:, 2])))
+        plan_plot(args.plot, points, values, areas=areas, outline=walls, windows=glazing, quantity=quantity,
+                  unit=unit, thresholds=thresholds, title=f"{quantity} [{unit}], {Path(args.scene).name}")
+    if args.view3d:
+        _view3d(scene, points, values, areas, f"{quantity} [{unit}]", args.view3d,
+                title=f"{Path(args.scene).name}: {quantity.lower()}")
+    return doc
+
+
+def _view3d(scene, points, values, areas, label, screenshot, title=None) -> None:
+    """Render the room with its points off screen into ``screenshot``; a failure of VTK is a
+    :class:`RunError` (exit 1), not bad input."""
+    from . import view3d
+
+    layers = [view3d.GeometryLayer(scene)]
+    if points is not None:
+        layers.append(view3d.PointLayer(points, values, label=label, areas=areas))
+    try:
+        view3d.render(scene, layers, points=points, screenshot=screenshot, title=title)
+    except InputError:
+        raise
+    except Exception as exc:  # VTK reports a missing OpenGL as anything from RuntimeError up
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise RunError(f"{screenshot}: the 3-D view failed ({reason})") from None
+
+
+def _run_illuminance(args) -> int:
+    t0 = time.perf_counter()
+    from .metrics import summary_line
+    from .photometry import luminance
+    from .scene import load_scene
+    from .sensors import read_points, write_results
+
+    _check_run_files(args)
+    scene = load_scene(args.scene)
+    points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
+    result, integ, options = _compute(scene, args, points, normals)
     stats = result.stats
     E = result.illuminance
     write_results(args.output, points / scene.unit_scale, normals, E,
-                  luminance(result.direct), luminance(result.indirect))
+                  luminance(result.direct), luminance(result.indirect), areas=areas)
     if args.cache:
         integ.cache.save(args.cache)
+    thresholds = args.thresholds if args.thresholds is not None else [300.0, 500.0]
+    doc = _report(args, scene, points, E, areas, "Illuminance", "lux", thresholds, {})
     seconds = time.perf_counter() - t0
     if args.stats:
-        doc = {
-            "points": len(points),
-            "records": stats.records,
-            "new_records": stats.new_records,
-            "primary_evaluations": stats.primary_evaluations,
-            "cache_hits": stats.cache_hits,
-            "queries": stats.queries,
-            "rays": stats.rays,
-            "seconds": seconds,
-            "compute_seconds": stats.seconds,
-            "illuminance": {"mean": float(E.mean()), "min": float(E.min()), "max": float(E.max())},
-            "settings": {**options.as_dict(),
-                         "min_spacing": stats.min_spacing / scene.unit_scale,
-                         "max_spacing": stats.max_spacing / scene.unit_scale,
-                         "units": scene.units},
-        }
-        atomic_write_text(args.stats, json.dumps(doc, indent=2) + "\n")
+        _write_stats(args, scene, result, options, seconds, {"illuminance": E})
     if not args.quiet:
         print(f"lbl-illum: illuminance at {len(points)} points (mean {E.mean():.4g} lux, min {E.min():.4g}, "
               f"max {E.max():.4g}) in {seconds:.2f} s; records per level {stats.records} "
-              f"({stats.primary_evaluations} new); {stats.rays:,} rays -> {args.output}", file=sys.stderr)
+              f"({stats.primary_evaluations} new); {stats.rays:,} rays; {summary_line(doc, extremes=False)} "
+              f"-> {args.output}", file=sys.stderr)
+    return 0
+
+
+def _overcast_scene(scene, sky_illuminance: float, ground_reflectance: float | None):
+    """The scene under a CIE overcast sky of ``sky_illuminance`` [lux] and no sun."""
+    import dataclasses
+
+    from .sky import sky_from_table
+
+    if ground_reflectance is None:
+        ground_reflectance = float(getattr(scene.sky, "ground_reflectance", 0.2))
+    if not 0.0 <= ground_reflectance <= 1.0:
+        raise InputError(f"--ground-reflectance must be within 0 and 1, got {ground_reflectance:g}")
+    if not sky_illuminance > 0.0 or sky_illuminance == float("inf"):
+        raise InputError(f"--sky-illuminance must be a positive illuminance [lux], got {sky_illuminance:g}")
+    sky = sky_from_table({"type": "cie-overcast", "horizontal_illuminance": sky_illuminance,
+                          "ground_reflectance": ground_reflectance}, "--sky-illuminance")
+    return dataclasses.replace(scene, sky=sky, sun=None)
+
+
+def _run_daylight_factor(args) -> int:
+    t0 = time.perf_counter()
+    from .metrics import daylight_factor, summary_line, unobstructed_horizontal_illuminance
+    from .photometry import luminance
+    from .scene import load_scene
+    from .sensors import read_points, write_results
+
+    _check_run_files(args)
+    scene = _overcast_scene(load_scene(args.scene), args.sky_illuminance, args.ground_reflectance)
+    E_h = unobstructed_horizontal_illuminance(lambda d: luminance(scene.sky.luminance(d)))
+    points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
+    result, integ, options = _compute(scene, args, points, normals)
+    stats = result.stats
+    E = result.illuminance
+    DF = daylight_factor(E, E_h)
+    write_results(args.output, points / scene.unit_scale, normals, E,
+                  luminance(result.direct), luminance(result.indirect), daylight_factor=DF, areas=areas)
+    if args.cache:
+        integ.cache.save(args.cache)
+    thresholds = args.thresholds if args.thresholds is not None else [2.0]
+    sky = {"sky": {"type": "cie-overcast", "horizontal_illuminance": args.sky_illuminance,
+                   "unobstructed_horizontal_illuminance": E_h,
+                   "ground_reflectance": scene.sky.ground_reflectance}}
+    doc = _report(args, scene, points, DF, areas, "Daylight factor", "%", thresholds, sky)
+    seconds = time.perf_counter() - t0
+    if args.stats:
+        _write_stats(args, scene, result, options, seconds, {"daylight_factor": DF, "illuminance": E})
+    if not args.quiet:
+        print(f"lbl-illum: daylight factor at {len(points)} points (mean {DF.mean():.4g}%, min {DF.min():.4g}, "
+              f"max {DF.max():.4g}) in {seconds:.2f} s under a CIE overcast sky (E_h {E_h:.6g} lux); records per "
+              f"level {stats.records} ({stats.primary_evaluations} new); {stats.rays:,} rays; "
+              f"{summary_line(doc, extremes=False)} -> {args.output}", file=sys.stderr)
+    return 0
+
+
+def _run_grid(args) -> int:
+    t0 = time.perf_counter()
+    import numpy as np
+
+    from .grid import plan_outline, workplane_grid
+    from .plots import check_plot_path
+    from .scene import load_scene
+    from .sensors import check_output_path, write_points
+
+    check_output_path(args.output, formats=(".pts",))
+    if args.plot:
+        check_plot_path(args.plot)
+    scene = load_scene(args.scene)
+    k = scene.unit_scale
+    height = 0.8 if args.height is None else args.height * k
+    margin = 0.5 if args.margin is None else args.margin * k
+    spacing = None if args.spacing is None else args.spacing * k
+    grid = workplane_grid(scene, height=height, spacing=spacing, margin=margin, surfaces=args.surface,
+                          align=args.align)
+    where = "the floor" if not args.surface else ", ".join(args.surface)
+    header = [f"lbl-illum grid {Path(args.scene).name}: {len(grid.points)} points {height / k:g} {scene.units} "
+              f"above {where}, normals up; margin {margin / k:g} {scene.units}"]
+    for lat in grid.lattices:
+        header.append(f"area {lat.name} at z = {lat.level / k:.4g}: {lat.counts[0]} x {lat.counts[1]} cells of "
+                      f"{lat.spacing[0] / k:.4g} x {lat.spacing[1] / k:.4g} {scene.units} at {lat.angle:.4g} deg "
+                      f"(p = {lat.p / k:.4g} {scene.units}{' given' if spacing else ' by EN 12464-1'}), "
+                      f"{lat.points} points" + (f"; left out: {_dropped(lat.dropped)}" if lat.dropped else ""))
+    header.append("columns: x y z nx ny nz" + ("" if args.no_names else " area"))
+    write_points(args.output, grid.points / k, grid.normals, None if args.no_names else grid.areas,
+                 header="\n".join(header))
+    if args.plot:
+        from .plots import plan_plot
+
+        walls, glazing = plan_outline(scene, float(np.median(grid.points[:, 2])))
+        plan_plot(args.plot, grid.points, None, areas=grid.areas, outline=walls, windows=glazing,
+                  title=f"Sensor grid, {Path(args.scene).name}: {len(grid.points)} points at {height:g} m")
+    if not args.quiet:
+        for warning in scene.warnings + grid.warnings:
+            print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+        parts = []
+        for name in dict.fromkeys(lat.name for lat in grid.lattices):
+            lats = [lat for lat in grid.lattices if lat.name == name]
+            count = sum(lat.points for lat in lats)
+            if len(lats) == 1:
+                lat = lats[0]
+                parts.append(f"{name}: {count} on {lat.counts[0]} x {lat.counts[1]} cells of "
+                             f"{lat.spacing[0] / k:.3g} x {lat.spacing[1] / k:.3g} {scene.units}")
+            else:
+                parts.append(f"{name}: {count} in {len(lats)} pieces")
+        areas = "; ".join(parts)
+        print(f"lbl-illum: grid: {len(grid.points)} points in {len(grid.area_names)} "
+              f"{'area' if len(grid.area_names) == 1 else 'areas'} ({areas}) in {time.perf_counter() - t0:.2f} s "
+              f"-> {args.output}", file=sys.stderr)
+    return 0
+
+
+def _dropped(counts: dict) -> str:
+    return ", ".join(f"{n} {rule}" for rule, n in counts.items())
+
+
+def _run_view(args) -> int:
+    t0 = time.perf_counter()
+    from .scene import load_scene
+    from .sensors import read_results
+    from .view3d import check_view_path, require_pyvista
+
+    require_pyvista()
+    if args.screenshot:
+        check_view_path(args.screenshot)
+    scene = load_scene(args.scene)
+    points = values = areas = None
+    label = "points"
+    if args.results:
+        points, _, columns, areas = read_results(args.results, scene.unit_scale)
+        for key, name in (("daylight_factor", "Daylight factor [%]"), ("illuminance", "Illuminance [lux]")):
+            if key in columns:
+                values, label = columns[key], name
+                break
+    _view3d(scene, points, values, areas, label, args.screenshot, title=Path(args.scene).name)
+    if not args.quiet and args.screenshot:
+        what = f"{len(points)} points" if points is not None else "the scene"
+        print(f"lbl-illum: view: {what} in {time.perf_counter() - t0:.2f} s -> {args.screenshot}", file=sys.stderr)
     return 0
 
 
@@ -326,6 +638,12 @@ def main(argv=None) -> int:
             return 2
         if args.command == "illuminance":
             return _run_illuminance(args)
+        if args.command == "daylight-factor":
+            return _run_daylight_factor(args)
+        if args.command == "grid":
+            return _run_grid(args)
+        if args.command == "view":
+            return _run_view(args)
         if args.command == "validate":
             return _run_validate(args)
         if args.command == "export":
@@ -334,6 +652,9 @@ def main(argv=None) -> int:
     except InputError as exc:
         print(f"lbl-illum: error: {exc}", file=sys.stderr)
         return 2
+    except RunError as exc:
+        print(f"lbl-illum: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("lbl-illum: interrupted", file=sys.stderr)
         return 130

@@ -10,7 +10,7 @@ option                 default  meaning
                                 source (sun, light surfaces, sky and ground seen directly or
                                 through glass).  Radiance's ``-ab`` is ``bounces + 1``
 ``samples``            1024     hemisphere samples M·N of a primary evaluation (Eq. 2) at the
-                                first level
+                                first level of the cache
 ``ambient``            0        illuminance [lux] substituted at the bounce limit
 ``min_spacing``        auto     lower clamp on each record's R_i [scene units]
 ``max_spacing``        auto     upper clamp on each record's R_i [scene units]
@@ -18,11 +18,13 @@ option                 default  meaning
                                 the first level's, and not by growth above 0.4) and halves
                                 the samples
 ``seed``               0        seed of every random number; same seed, same result
-``point_samples``      none     when set, every query point gets its own primary evaluation with
-                                this many samples (no interpolation among the points), and the
+``point_samples``      none     every query point gets its own primary evaluation with this
+                                many samples (no interpolation among the points), and the
                                 cache — ``accuracy``, ``samples`` and §3.4's series — starts at
                                 the first reflection.  On sparse sensor grids interpolating
-                                among the points buys little
+                                among the points buys little.  0 (or none): the cache starts
+                                at the points themselves, as in the paper — the choice for
+                                dense grids and images
 ``interpolation``      gradients  ``paper``: Eq. 5 as published; ``gradients``: each record
                                 extrapolated by its rotational and translational gradients
                                 (Ward & Heckbert 1992) before the Eq. 5 average; ``hessian``:
@@ -123,6 +125,8 @@ class Options:
     point_samples: int | None = None
 
     def __post_init__(self):
+        if self.point_samples == 0 and not isinstance(self.point_samples, bool):
+            object.__setattr__(self, "point_samples", None)      # 0: the cache starts at the points
         self.validate("options")
 
     # -- validation -------------------------------------------------------
@@ -140,7 +144,7 @@ class Options:
                 bad(key, f"must be >= 0, got {value!r}")
         if self.point_samples is not None and (isinstance(self.point_samples, bool)
                                                or not isinstance(self.point_samples, int) or self.point_samples < 1):
-            bad("point_samples", f"must be a whole number >= 1, got {self.point_samples!r}")
+            bad("point_samples", f"must be a whole number >= 0, got {self.point_samples!r}")
         for key in ("bounces", "samples", "seed"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int):

@@ -2,14 +2,22 @@
 
 Points use the Radiance/Honeybee ``.pts`` layout: one point per line,
 ``x y z nx ny nz`` separated by white space, in the scene file's units; blank lines
-and ``#`` comments are allowed.
+and ``#`` comments are allowed.  A line may end with a seventh field, the name of
+the area the point belongs to (``lbl-illum grid`` writes it); a name is one word
+without ``#``, ``,`` or ``"`` that does not read as a number.  Lines without a name
+belong to the unnamed area ``""``.  (Radiance's ``rtrace`` reads numbers only: give it
+the points through ``lbl-illum export radiance --points``, which writes six columns.)
 
 Results are written to a temporary file in the output's folder and renamed into
 place, so a failed run never leaves a partial output file:
 
 * ``.csv``: a header row, then ``x,y,z,nx,ny,nz,illuminance,direct,indirect`` per point
-  (illuminance [lux], photometric) in input order;
-* ``.txt``: one illuminance value [lux] per line (the Radiance/Honeybee habit).
+  (illuminance [lux], photometric) in input order.  A daylight-factor run puts
+  ``daylight_factor`` [%] before ``illuminance``; points with area names add a last
+  column ``area``.  Readers that take columns by name or the first nine by position
+  are unaffected;
+* ``.txt``: one value per line (the Radiance/Honeybee habit): the illuminance [lux],
+  or the daylight factor [%] of a daylight-factor run.
 """
 
 from __future__ import annotations
@@ -23,15 +31,30 @@ import numpy as np
 from .errors import InputError
 from .files import atomic_write_text
 
-__all__ = ["read_points", "write_results", "check_output_path", "RESULT_FORMATS"]
+__all__ = ["read_points", "write_points", "write_results", "read_results", "check_output_path", "check_area_name",
+           "RESULT_FORMATS"]
 
 RESULT_FORMATS = (".csv", ".txt")
 
 
-def read_points(path: str | os.PathLike, unit_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+def check_area_name(name: str, where: str) -> str:
+    """Refuse an area name that cannot stand as the seventh field of a ``.pts`` line
+    (or in a CSV cell unquoted): empty, white space, ``#``, ``,``, ``"``, or a number."""
+    if not name or any(c.isspace() for c in name) or any(c in name for c in '#,"'):
+        raise InputError(f"{where}: area name {name!r} must be one word without '#', ',' or '\"'")
+    try:
+        float(name)
+    except ValueError:
+        return name
+    raise InputError(f"{where}: area name {name!r} looks like a number")
+
+
+def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas: bool = False):
     """Read a ``.pts`` file: ((n, 3) points [m], (n, 3) unit normals).
 
-    Coordinates are multiplied by ``unit_scale`` (metres per scene unit).
+    Coordinates are multiplied by ``unit_scale`` (metres per scene unit).  With
+    ``with_areas=True`` a third item is returned: the (n,) area names (object array of
+    str, ``""`` on lines without a name).
     """
     path = Path(path)
     name = path.name
@@ -41,28 +64,50 @@ def read_points(path: str | os.PathLike, unit_scale: float = 1.0) -> tuple[np.nd
         raise InputError(f"{name}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{name}: cannot read ({exc.__class__.__name__})") from None
-    rows = []
+    rows, areas = [], []
     for number, line in enumerate(text.splitlines(), start=1):
         body = line.split("#", 1)[0].strip()
         if not body:
             continue
         fields = body.split()
-        if len(fields) != 6:
-            raise InputError(f"{name}: line {number}: expected 6 numbers 'x y z nx ny nz', got {len(fields)}")
+        if len(fields) not in (6, 7):
+            raise InputError(f"{name}: line {number}: expected 6 numbers 'x y z nx ny nz' and an optional "
+                             f"area name, got {len(fields)} fields")
         try:
-            values = [float(f) for f in fields]
+            values = [float(f) for f in fields[:6]]
         except ValueError:
             raise InputError(f"{name}: line {number}: not a number in {body!r}") from None
         if not all(math.isfinite(v) for v in values):
             raise InputError(f"{name}: line {number}: values must be finite")
         if math.sqrt(sum(v * v for v in values[3:])) <= 1e-12:
             raise InputError(f"{name}: line {number}: zero-length normal")
+        areas.append(check_area_name(fields[6], f"{name}: line {number}") if len(fields) == 7 else "")
         rows.append(values)
     if not rows:
         raise InputError(f"{name}: no points")
     data = np.array(rows, dtype=np.float64)
     normals = data[:, 3:] / np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
+    if with_areas:
+        return data[:, :3] * unit_scale, normals, np.array(areas, dtype=object)
     return data[:, :3] * unit_scale, normals
+
+
+def write_points(path: str | os.PathLike, points: np.ndarray, normals: np.ndarray,
+                 areas: np.ndarray | None = None, header: str | None = None) -> None:
+    """Write a ``.pts`` file atomically: ``x y z nx ny nz [area]`` per line.
+
+    ``points`` are written as given (the file's units); ``header`` becomes ``#`` comment
+    lines at the top.  Coordinates keep 10 significant digits.
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    lines = [f"# {h}" for h in header.splitlines()] if header else []
+    for i, (p, n) in enumerate(zip(points, normals)):
+        row = " ".join(f"{v:.10g}" for v in p) + " " + " ".join(f"{v:.10g}" for v in n + 0.0)
+        if areas is not None and areas[i]:
+            row += " " + check_area_name(str(areas[i]), Path(path).name)
+        lines.append(row)
+    atomic_write_text(path, "\n".join(lines) + "\n")
 
 
 def check_output_path(path: str | os.PathLike, formats=RESULT_FORMATS) -> Path:
@@ -76,18 +121,80 @@ def check_output_path(path: str | os.PathLike, formats=RESULT_FORMATS) -> Path:
 
 
 def write_results(path: str | os.PathLike, points: np.ndarray, normals: np.ndarray, illuminance: np.ndarray,
-                  direct: np.ndarray | None = None, indirect: np.ndarray | None = None) -> None:
-    """Write results in the format given by the extension (``points`` in the file's units)."""
+                  direct: np.ndarray | None = None, indirect: np.ndarray | None = None, *,
+                  daylight_factor: np.ndarray | None = None, areas: np.ndarray | None = None) -> None:
+    """Write results in the format given by the extension (``points`` in the file's units).
+
+    ``daylight_factor`` [%] adds the column ``daylight_factor`` before ``illuminance``
+    and is the value of a ``.txt`` file; ``areas`` adds the last column ``area`` when
+    any point has a name.
+    """
     path = check_output_path(path)
     if path.suffix.lower() == ".txt":
-        atomic_write_text(path, "".join(f"{e:.6g}\n" for e in illuminance))
+        values = illuminance if daylight_factor is None else daylight_factor
+        atomic_write_text(path, "".join(f"{e:.6g}\n" for e in values))
         return
-    cols = ["x", "y", "z", "nx", "ny", "nz", "illuminance"]
-    data = [points, normals, np.asarray(illuminance)[:, None]]
+    cols = ["x", "y", "z", "nx", "ny", "nz"]
+    data = [points, normals]
+    if daylight_factor is not None:
+        cols.append("daylight_factor")
+        data.append(np.asarray(daylight_factor)[:, None])
+    cols.append("illuminance")
+    data.append(np.asarray(illuminance)[:, None])
     if direct is not None and indirect is not None:
         cols += ["direct", "indirect"]
         data += [np.asarray(direct)[:, None], np.asarray(indirect)[:, None]]
     table = np.hstack(data)
-    lines = [",".join(cols)]
-    lines += [",".join(f"{v:.9g}" for v in row) for row in table]
+    named = areas is not None and any(areas)
+    lines = [",".join(cols + (["area"] if named else []))]
+    for i, row in enumerate(table):
+        line = ",".join(f"{v:.9g}" for v in row)
+        lines.append(line + f",{areas[i]}" if named else line)
     atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def read_results(path: str | os.PathLike, unit_scale: float = 1.0):
+    """Read a results ``.csv`` (or a ``.pts`` file, which has no values).
+
+    Returns ``(points [m], normals, columns, areas)``: ``columns`` maps each value column
+    (``illuminance``, ``daylight_factor``, ...) to an (n,) array; ``areas`` is (n,) str.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".txt":
+        raise InputError(f"{path.name}: a .txt result has no positions; give the .csv of the run or its .pts")
+    if path.suffix.lower() != ".csv":
+        points, normals, areas = read_points(path, unit_scale, with_areas=True)
+        return points, normals, {}, areas
+    try:
+        lines = [l for l in path.read_text().splitlines() if l.strip()]
+    except FileNotFoundError:
+        raise InputError(f"{path.name}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path.name}: cannot read ({exc.__class__.__name__})") from None
+    if not lines:
+        raise InputError(f"{path.name}: empty file")
+    header = [h.strip() for h in lines[0].split(",")]
+    missing = [c for c in ("x", "y", "z", "nx", "ny", "nz") if c not in header]
+    if missing:
+        raise InputError(f"{path.name}: line 1: no column {missing[0]!r} (expected a results file of lbl-illum)")
+    numeric = [h for h in header if h != "area"]
+    rows, areas = [], []
+    for number, line in enumerate(lines[1:], start=2):
+        fields = [f.strip() for f in line.split(",")]
+        if len(fields) != len(header):
+            raise InputError(f"{path.name}: line {number}: expected {len(header)} fields, got {len(fields)}")
+        record = dict(zip(header, fields))
+        try:
+            rows.append([float(record[h]) for h in numeric])
+        except ValueError:
+            raise InputError(f"{path.name}: line {number}: not a number") from None
+        areas.append(record.get("area", ""))
+    if not rows:
+        raise InputError(f"{path.name}: no points")
+    data = np.array(rows, dtype=np.float64)
+    if not np.isfinite(data).all():
+        raise InputError(f"{path.name}: values must be finite")
+    col = {h: data[:, i] for i, h in enumerate(numeric)}
+    points = np.column_stack([col.pop(c) for c in ("x", "y", "z")]) * unit_scale
+    normals = np.column_stack([col.pop(c) for c in ("nx", "ny", "nz")])
+    return points, normals, col, np.array(areas, dtype=object)

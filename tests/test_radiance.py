@@ -100,7 +100,9 @@ def test_commands_and_ambient_options(office_export):
     assert cmd == ["rtrace", "-I", "-h", "-n", "3", "-ab", "2", "scene.oct"]
     opts = ex.ambient_options
     get = {opts[i]: opts[i + 1] for i in range(0, len(opts) - 1) if opts[i].startswith("-")}
-    assert get["-ab"] == "9" and get["-aa"] == "0.1" and get["-ad"] == "1024" and get["-as"] == "0"
+    o = scene.options                         # the scene's defaults: the high preset
+    assert get["-ab"] == str(o.bounces + 1) and get["-aa"] == f"{o.accuracy:g}" and get["-ad"] == str(o.samples)
+    assert get["-as"] == "0"
     # -ar: Radiance's largest record radius 64·cube/ar equals our automatic max spacing
     # (the octree cube of the office is the 200 m ground)
     ar = int(get["-ar"])

@@ -238,16 +238,16 @@ def engine_ladder(kind: str, quick: bool = False) -> list[Setting]:
         options = engine_options(name, **bounces)
         add("preset", f"preset {name}" + (" (bounces 1)" if bounces else ""), options)
     for a, s in ladder["grid"]:
-        options = engine_options(accuracy=a, samples=s, point_samples=None, **bounces)
+        options = engine_options(accuracy=a, samples=s, point_samples=0, **bounces)
         add("a × samples", engine_label(options), options)
     for a, s, ps in ladder["point_samples"]:
         options = engine_options(accuracy=a, samples=s, point_samples=ps, **bounces)
         add("point samples", engine_label(options), options)
     for a, s in ladder["paper"]:
-        options = engine_options(accuracy=a, samples=s, point_samples=None, interpolation="paper", **bounces)
+        options = engine_options(accuracy=a, samples=s, point_samples=0, interpolation="paper", **bounces)
         add("paper interpolation", engine_label(options), options)
     for s in ladder["pure"]:
-        options = engine_options(accuracy=0.0, samples=s, point_samples=None, **bounces)
+        options = engine_options(accuracy=0.0, samples=s, point_samples=0, **bounces)
         add("Monte Carlo", engine_label(options), options)
     return dedupe(out)
 
