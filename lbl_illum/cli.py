@@ -122,7 +122,10 @@ def _add_quality_options(p) -> None:
 def _add_file_options(p) -> None:
     """Cache and statistics files, shared by ``illuminance`` and ``daylight-factor``."""
     r = p.add_argument_group("files")
-    r.add_argument("--cache", metavar="FILE", help="read records from FILE if it exists; write all records back")
+    r.add_argument("--cache", metavar="FILE", help="keep the cache's records in FILE: read them if it exists, write "
+                   "them back (merged with other runs' records) at the end and when interrupted")
+    r.add_argument("--rebuild-cache", action="store_true", help="with --cache: replace FILE, even one made for "
+                   "other settings or a damaged one, instead of refusing it")
     r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
 
 
@@ -208,6 +211,16 @@ def _build_parser() -> argparse.ArgumentParser:
     w.add_argument("--screenshot", metavar="PNG", help="write the view to this .png file instead of a window")
     w.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
+    from .render import add_render_arguments
+    r = sub.add_parser("render", help="luminance image of a view (cd/m2) through the irradiance cache",
+                       description="Render the luminance image of a Radiance view (cd/m2) through the "
+                       "irradiance cache: .exr, .hdr (Radiance RGBE with VIEW= and EXPOSURE= headers) or .tif, "
+                       "with an optional tone-mapped preview and false-colour image; see docs/rendering.md.  "
+                       "Give the view as --view=\"-vtv -vp ...\" (with '=': it starts with a dash).",
+                       epilog=QUALITY_HELP + preset_table(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_render_arguments(r)
+    _add_quality_options(r)
+
     try:
         STUDIES = _studies().STUDIES
     except InputError:        # said when the command is used
@@ -236,10 +249,13 @@ def _build_parser() -> argparse.ArgumentParser:
     x.add_argument("--points", metavar="PTS", help="sensor points (.pts, scene units), copied to DIR/points.pts in metres")
     x.add_argument("--force", action="store_true", help="write into an existing non-empty DIR, replacing files "
                    "of the same names")
-    x.add_argument("--glass", choices=("brtdfunc", "glass"), default="brtdfunc",
-                   help="a BRTDfunc with constant coefficients (default: exactly lbl-illum's angle-independent "
-                        "glass) or Radiance's glass (Fresnel angle dependence: less light at oblique angles)")
+    x.add_argument("--glass", choices=("auto", "glass", "brtdfunc"), default="auto",
+                   help="auto (default): each pane as its model says — Fresnel single panes as Radiance's glass, "
+                        "double panes and constant panes as BRTDfunc; or every pane as glass, or as BRTDfunc")
     x.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+    from .cachecli import add_cache_commands
+
+    add_cache_commands(sub)
     return parser
 
 
@@ -250,6 +266,8 @@ studies:
   office-tradeoff     seconds against error on examples/office; the --preset ladder
   extremes            every knob at its extremes: finite, plausible, checked values
   scene-requires      records and rays go only where the queries need them
+  figure5             the paper's Figure 5: blocks on a table, cache against pure Monte Carlo at equal rays
+  deep-room           window portals and unglazed openings on a deep room, with and without portals
 """
 
 
@@ -268,6 +286,8 @@ def _check_run_files(args) -> None:
     from .sensors import check_output_path
 
     check_output_path(args.output)
+    if args.rebuild_cache and not args.cache:
+        raise InputError("--rebuild-cache: give the cache file with --cache FILE")
     for extra in (args.stats, args.cache):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
@@ -294,7 +314,6 @@ def _run_options(scene, args):
 def _compute(scene, args, points, normals):
     """Run the integrator with the options, cache file and progress bar of ``args``:
     (result, integrator, options)."""
-    from .cache import IrradianceCache
     from .integrator import Integrator
 
     options = _run_options(scene, args)
@@ -304,9 +323,9 @@ def _compute(scene, args, points, normals):
     bar = _ProgressBar(enabled=not args.quiet)
     try:
         integ = Integrator(scene, options, progress=bar)
-        if args.cache and Path(args.cache).exists():
-            integ.cache = IrradianceCache.load(args.cache, integ.fingerprint)
-        result = integ.compute(points, normals)
+        if args.cache:
+            integ.attach_cache_file(args.cache, rebuild=args.rebuild_cache)
+        result = integ.compute(points, normals)       # writes the cache file too
     finally:
         bar.close()
     return result, integ, options
@@ -395,8 +414,6 @@ def _run_illuminance(args) -> int:
     E = result.illuminance
     write_results(args.output, points / scene.unit_scale, normals, E,
                   luminance(result.direct), luminance(result.indirect), areas=areas)
-    if args.cache:
-        integ.cache.save(args.cache)
     thresholds = args.thresholds if args.thresholds is not None else [300.0, 500.0]
     doc = _report(args, scene, points, E, areas, "Illuminance", "lux", thresholds, {})
     seconds = time.perf_counter() - t0
@@ -444,8 +461,6 @@ def _run_daylight_factor(args) -> int:
     DF = daylight_factor(E, E_h)
     write_results(args.output, points / scene.unit_scale, normals, E,
                   luminance(result.direct), luminance(result.indirect), daylight_factor=DF, areas=areas)
-    if args.cache:
-        integ.cache.save(args.cache)
     thresholds = args.thresholds if args.thresholds is not None else [2.0]
     sky = {"sky": {"type": "cie-overcast", "horizontal_illuminance": args.sky_illuminance,
                    "unobstructed_horizontal_illuminance": E_h,
@@ -644,10 +659,16 @@ def main(argv=None) -> int:
             return _run_grid(args)
         if args.command == "view":
             return _run_view(args)
+        if args.command == "render":
+            from .render import render_command
+            return render_command(args)
         if args.command == "validate":
             return _run_validate(args)
         if args.command == "export":
             return _run_export(args)
+        if args.command == "cache":
+            from .cachecli import run_cache_command
+            return run_cache_command(args)
         raise InputError(f"lbl-illum: unknown command {args.command!r}")
     except InputError as exc:
         print(f"lbl-illum: error: {exc}", file=sys.stderr)
@@ -655,9 +676,13 @@ def main(argv=None) -> int:
     except RunError as exc:
         print(f"lbl-illum: error: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("lbl-illum: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        kept = ""
+        if getattr(exc, "saved_cache", None):
+            kept = f"; {sum(exc.saved_records):,} complete records kept in {exc.saved_cache}"
+        terminated = type(exc).__name__ == "Terminated"      # SIGTERM (lbl_illum.cache.Terminated)
+        print(f"lbl-illum: {'terminated' if terminated else 'interrupted'}{kept}", file=sys.stderr)
+        return 143 if terminated else 130
     except OSError as exc:
         print(f"lbl-illum: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 1

@@ -12,11 +12,22 @@ import difflib
 import math
 from typing import Any, Iterable, Mapping
 
-__all__ = ["InputError", "check_keys", "get_number", "get_rgb", "get_vector"]
+__all__ = ["InputError", "check_keys", "get_number", "get_rgb", "get_vector", "show", "plural"]
+
+#: Longest value quoted in a message (longer ones are cut, ``...`` marking the cut), so that
+#: a wrong value as large as a whole table still gives a one-line message.
+SHOW_LENGTH = 60
 
 
 class InputError(ValueError):
     """Bad input: the message is a single line naming file and line or key."""
+
+
+def show(value: Any, length: int = SHOW_LENGTH) -> str:
+    """``repr(value)`` for a message: one line (``repr`` escapes line breaks), at most
+    ``length`` characters."""
+    text = repr(value)
+    return text if len(text) <= length else text[: length - 3] + "..."
 
 
 def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str,
@@ -28,10 +39,10 @@ def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str,
     allowed = list(allowed)
     for key in table:
         if key not in allowed:
-            near = difflib.get_close_matches(key, allowed, n=1)
+            near = difflib.get_close_matches(str(key), allowed, n=1)
             hint = f" (did you mean '{near[0]}'?)" if near else (
                 f" (valid keys: {', '.join(allowed)})" if allowed else "")
-            raise InputError(f"{where}: unknown key '{key}'{hint}")
+            raise InputError(f"{where}: unknown key {show(str(key))}{hint}")
     for key in required:
         if key not in table:
             raise InputError(f"{where}: missing key '{key}'")
@@ -39,11 +50,14 @@ def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str,
 
 def _finite_number(value: Any, where: str, key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{where}: '{key}' must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise InputError(f"{where}: '{key}' must be finite, got {value!r}")
-    return value
+        raise InputError(f"{where}: '{key}' must be a number, got {show(value)}")
+    try:
+        number = float(value)
+    except OverflowError:           # an integer beyond the float range (TOML allows none past 64 bits)
+        number = math.inf
+    if not math.isfinite(number):
+        raise InputError(f"{where}: '{key}' must be finite, got {show(value)}")
+    return number
 
 
 def get_number(table: Mapping[str, Any], key: str, where: str, default: Any = None,
@@ -74,7 +88,7 @@ def get_rgb(table: Mapping[str, Any], key: str, where: str, default: Any = None,
         value = table[key]
     if isinstance(value, (list, tuple)):
         if len(value) != 3:
-            raise InputError(f"{where}: '{key}' must be a number or [r, g, b], got {value!r}")
+            raise InputError(f"{where}: '{key}' must be a number or [r, g, b], got {show(value)}")
         rgb = tuple(_finite_number(v, where, key) for v in value)
     else:
         v = _finite_number(value, where, key)
@@ -93,7 +107,7 @@ def get_vector(table: Mapping[str, Any], key: str, where: str, length: int = 3) 
         raise InputError(f"{where}: missing key '{key}'")
     value = table[key]
     if not isinstance(value, (list, tuple)) or len(value) != length:
-        raise InputError(f"{where}: '{key}' must be a list of {length} numbers, got {value!r}")
+        raise InputError(f"{where}: '{key}' must be a list of {length} numbers, got {show(value)}")
     return tuple(_finite_number(v, where, key) for v in value)
 
 

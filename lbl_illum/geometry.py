@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import difflib
 import io
+import logging
 import re
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -16,14 +17,34 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import InputError, check_keys, get_number, get_vector
+from .errors import InputError, check_keys, get_number, get_vector, plural, show
 
 __all__ = [
     "Triangles", "MeshPart", "Shape", "SHAPE_KEYS", "SPHERE_SUBDIVISIONS", "SPHERE_MAX_DEVIATION",
     "PLANAR_TOLERANCE", "load_mesh_file", "shape_from_table", "sphere_triangles", "box_triangles",
     "rectangle_triangles", "polygon_triangles", "triangulate_polygon", "degenerate_mask",
-    "duplicate_mask", "TriangleSampler",
+    "duplicate_mask", "TriangleSampler", "MAX_COORDINATE", "check_coordinates",
 ]
+
+#: Largest magnitude of a coordinate [m] the scene, its geometry files and the sensor points
+#: may use.  No daylighting scene comes near it (it is 2.6 times the distance to the Moon),
+#: and below it squared lengths and cross products stay far inside the float64 range, so
+#: a mistyped exponent is refused instead of overflowing in the geometry code.
+MAX_COORDINATE = 1e9
+
+
+def check_coordinates(values, where: str, what: str = "coordinate") -> np.ndarray:
+    """``values`` [m] as a float64 array; refuse NaN, infinite and out-of-range
+    (|x| > :data:`MAX_COORDINATE`) entries with a one-line :class:`InputError`."""
+    with np.errstate(all="ignore"):
+        v = np.asarray(values, dtype=np.float64)
+        bad = ~np.isfinite(v)
+        if bad.any():
+            raise InputError(f"{where}: {what} must be finite, got {v[bad].flat[0]!r}")
+        far = np.abs(v) > MAX_COORDINATE
+    if far.any():
+        raise InputError(f"{where}: {what} {v[far].flat[0]:g} m is beyond ±{MAX_COORDINATE:g} m")
+    return v
 
 
 @dataclass
@@ -119,19 +140,44 @@ def load_mesh_file(path: Path, where: str, scale: float = 1.0) -> list[MeshPart]
     ``where``.
     """
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{where}: is a folder, not a geometry file ({path})")
     if not path.is_file():
         raise InputError(f"{where}: no such file ({path})")
+    _quiet_trimesh()
     try:
         scene = _load_trimesh_scene(path)
+        parts = _scene_parts(scene, scale, obj_name=path.name if path.suffix.lower() == ".obj" else None,
+                             where=where)
     except InputError:
         raise
+    except PermissionError:
+        raise InputError(f"{where}: cannot read the file (permission denied)") from None
+    except FileNotFoundError as exc:   # a file the geometry file refers to (glTF buffers, textures)
+        raise InputError(f"{where}: cannot read the file (it refers to a missing file: "
+                         f"{show(str(exc.filename or exc))})") from None
     except Exception as exc:  # trimesh raises anything from ValueError to KeyError
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{where}: cannot read the file ({reason})") from None
-    parts = _scene_parts(scene, scale, obj_name=path.name if path.suffix.lower() == ".obj" else None)
+        raise InputError(f"{where}: cannot read the file ({_reason(exc)})") from None
     if not parts:
         raise InputError(f"{where}: the file contains no triangles")
     return parts
+
+
+def _reason(exc: BaseException) -> str:
+    """One line saying what an exception of a file reader was: ``Type: first line``."""
+    text = str(exc).strip()
+    first = text.splitlines()[0] if text else ""
+    first = first if len(first) <= 100 else first[:97] + "..."
+    return f"{type(exc).__name__}: {first}" if first else type(exc).__name__
+
+
+def _quiet_trimesh() -> None:
+    """Give trimesh's logger a NullHandler, as libraries should: without any handler,
+    Python prints its warnings about odd files on standard error, beside our one-line
+    messages.  An application that configures logging still receives them."""
+    log = logging.getLogger("trimesh")
+    if not any(isinstance(h, logging.NullHandler) for h in log.handlers):
+        log.addHandler(logging.NullHandler())
 
 
 def _load_trimesh_scene(path: Path):
@@ -167,10 +213,11 @@ def _read_obj(path: Path):
                         maintain_order=True, split_groups=True, group_material=True)
 
 
-def _scene_parts(scene, scale: float, obj_name: str | None) -> list[MeshPart]:
+def _scene_parts(scene, scale: float, obj_name: str | None, where: str = "geometry file") -> list[MeshPart]:
     """The triangle meshes of a trimesh scene as :class:`MeshPart` s in metres.
 
-    ``obj_name`` is the file name of an OBJ file (None for other formats).
+    ``obj_name`` is the file name of an OBJ file (None for other formats); ``where`` names
+    the file in messages.  A face whose vertex index is out of range is an :class:`InputError`.
     """
     import trimesh
 
@@ -180,8 +227,13 @@ def _scene_parts(scene, scale: float, obj_name: str | None) -> list[MeshPart]:
         mesh = scene.geometry[geom_name]
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue
-        tri = np.asarray(mesh.vertices, dtype=np.float64)[np.asarray(mesh.faces, dtype=np.int64)]
-        tri = _transform(tri, np.asarray(transform, dtype=np.float64)) * scale
+        faces = np.asarray(mesh.faces, dtype=np.int64)
+        vertices = np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+        if faces.ndim != 2 or faces.shape[1] != 3 or faces.min() < 0 or faces.max() >= len(vertices):
+            raise InputError(f"{where}: sub-mesh '{geom_name}': a face refers to a vertex the file does not "
+                             f"have ({len(vertices)} vertices)")
+        with np.errstate(all="ignore"):     # NaN, infinite and huge corners are refused by the caller
+            tri = _transform(vertices[faces], np.asarray(transform, dtype=np.float64)) * scale
         material = getattr(getattr(mesh.visual, "material", None), "name", None) or None
         group = _obj_group(str(geom_name), material, obj_name) if obj_name else None
         parts.append(MeshPart(str(geom_name), str(node), group, material, tri))
@@ -248,31 +300,37 @@ def shape_from_table(table: Mapping[str, Any], where: str, scale: float = 1.0,
     than ``shape``, the shape's own keys and ``extra_keys`` are refused.
     """
     kind = table.get("shape")
-    if kind not in SHAPE_KEYS:
-        near = difflib.get_close_matches(str(kind), SHAPE_KEYS, n=1)
+    if not isinstance(kind, str) or kind not in SHAPE_KEYS:
+        near = difflib.get_close_matches(kind, SHAPE_KEYS, n=1) if isinstance(kind, str) else []
         hint = f" (did you mean '{near[0]}'?)" if near else f" (valid: {', '.join(SHAPE_KEYS)})"
-        raise InputError(f"{where}: unknown shape {kind!r}{hint}")
+        raise InputError(f"{where}: unknown shape {show(kind)}{hint}")
     check_keys(table, ("shape",) + SHAPE_KEYS[kind] + tuple(extra_keys), where, required=SHAPE_KEYS[kind])
+
+    def length(key, value):
+        return check_coordinates(np.asarray(value, dtype=np.float64) * scale, where, f"'{key}'")
+
     if kind == "sphere":
-        center = np.array(get_vector(table, "center", where)) * scale
-        radius = get_number(table, "radius", where, minimum=0.0, min_inclusive=False) * scale
+        center = length("center", get_vector(table, "center", where))
+        radius = float(length("radius", get_number(table, "radius", where, minimum=0.0, min_inclusive=False)))
+        if radius <= 0.0:
+            raise InputError(f"{where}: 'radius' must be > 0, got {table['radius']!r} (zero in metres)")
         return Shape(sphere_triangles(center, radius), center, radius)
     if kind == "box":
         size = np.array(get_vector(table, "size", where))
         if np.any(size <= 0):
-            raise InputError(f"{where}: 'size' must be > 0 along every axis, got {table['size']!r}")
-        return Shape(box_triangles(np.array(get_vector(table, "center", where)) * scale, size * scale))
+            raise InputError(f"{where}: 'size' must be > 0 along every axis, got {show(table['size'])}")
+        return Shape(box_triangles(length("center", get_vector(table, "center", where)), length("size", size)))
     if kind == "rectangle":
-        origin, u, v = (np.array(get_vector(table, k, where)) * scale for k in ("origin", "u", "v"))
+        origin, u, v = (length(k, get_vector(table, k, where)) for k in ("origin", "u", "v"))
         return Shape(rectangle_triangles(origin, u, v, where))
-    return Shape(polygon_triangles(_get_points(table, "vertices", where) * scale, where))
+    return Shape(polygon_triangles(length("vertices", _get_points(table, "vertices", where)), where))
 
 
 def _get_points(table: Mapping[str, Any], key: str, where: str) -> np.ndarray:
     """(n, 3) array from a list of ``[x, y, z]`` in ``table[key]``, every number finite."""
     value = table[key]
     if not isinstance(value, (list, tuple)):
-        raise InputError(f"{where}: '{key}' must be a list of [x, y, z] points, got {value!r}")
+        raise InputError(f"{where}: '{key}' must be a list of [x, y, z] points, got {show(value)}")
     points = [get_vector({f"{key}[{i}]": p}, f"{key}[{i}]", where) for i, p in enumerate(value)]
     return np.array(points, dtype=np.float64).reshape(-1, 3)
 
@@ -315,7 +373,7 @@ def rectangle_triangles(origin, u, v, where: str = "rectangle") -> np.ndarray:
 
     The normal is along u × v.  Units are those of the arguments.
     """
-    o, u, v = (np.asarray(a, dtype=np.float64) for a in (origin, u, v))
+    o, u, v = (check_coordinates(a, where) for a in (origin, u, v))
     if np.linalg.norm(np.cross(u, v)) <= _EPS * np.linalg.norm(u) * np.linalg.norm(v) or not (
             np.any(u) and np.any(v)):
         raise InputError(f"{where}: 'u' and 'v' span no area (zero or parallel)")
@@ -330,7 +388,7 @@ def polygon_triangles(points, where: str = "polygon") -> np.ndarray:
     more than ``PLANAR_TOLERANCE`` of the diameter, and self-intersection are refused.
     Units are those of ``points``.
     """
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    p = check_coordinates(points, where, "vertex coordinate").reshape(-1, 3)
     if len(p) < 3:
         raise InputError(f"{where}: a polygon needs at least 3 vertices, got {len(p)}")
     diameter = float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))

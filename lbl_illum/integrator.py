@@ -45,6 +45,7 @@ limit tied to the scene's bounding box makes records as large as rooms).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import time
@@ -61,8 +62,8 @@ from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
 from .options import Options
 from .placement import distance_bands, pick_per_cell
 from .photometry import luminance
-from .geometry import TriangleSampler
-from .raycast import Hits, Tracer
+from .geometry import TriangleSampler, Triangles
+from .raycast import SELF_HIT_EPSILON, Hits, Tracer
 from .scene import Scene
 
 __all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint"]
@@ -171,7 +172,8 @@ def scene_fingerprint(scene: Scene, options: Options) -> str:
     for arr in (tri.vertices, tri.material, tri.sphere, tri.sphere_center, tri.sphere_radius):
         h.update(np.ascontiguousarray(arr).tobytes())
     desc = {
-        "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance) for m in scene.materials],
+        "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance, m.model, m.panes, m.index)
+                      for m in scene.materials],
         "sky": scene.sky.parameters,
         "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,
                                                scene.sun.direct_normal_illuminance),
@@ -234,10 +236,25 @@ class Integrator:
         self.sun = self.direct.sun
         #: limit each R_i by E/|∇_t E| of its known light (off only for comparisons)
         self.gradient_limit = True
+        # window portals (§5): the triangles of portal glass, then those of the scene's
+        # [[portals]] openings, which no other ray sees (their own tracer finds the openings
+        # a ray crosses, for the MIS weights)
         portal_ids = np.flatnonzero(self.materials.portal[scene.triangles.material])
-        self.portals = TriangleSampler(scene.triangles, portal_ids) if len(portal_ids) else None
+        openings = np.asarray(scene.portals, np.float64).reshape(-1, 3, 3)
+        portal_vertices = np.concatenate([scene.triangles.vertices[portal_ids], openings])
+        self.portals = TriangleSampler(Triangles(portal_vertices, np.zeros(len(portal_vertices), np.int32),
+                                                 np.full(len(portal_vertices), -1, np.int32)),
+                                       np.arange(len(portal_vertices))) if len(portal_vertices) else None
+        #: per portal triangle: its scene triangle (portal glass), or -1 (an opening)
+        self._portal_prim = np.concatenate([portal_ids, np.full(len(openings), -1)]).astype(np.int64)
         self._portal_index = np.full(len(scene.triangles), -1, np.int64)
         self._portal_index[portal_ids] = np.arange(len(portal_ids))
+        self._openings = None
+        if len(openings):
+            self._openings = Tracer(Triangles(openings, np.zeros(len(openings), np.int32),
+                                              np.full(len(openings), -1, np.int32)),
+                                    np.zeros(1, np.int8), np.zeros((1, 3)), threads=self.tracer.threads)
+            self._opening_first = len(portal_ids)     # portal index of the first opening triangle
         #: per material: reflects diffusely (ends a path at a diffuse level), and ρ/π
         self._diffuse_reflector = (self.materials.kind == DIFFUSE) & (self.materials.reflectance.max(axis=1) > 0.0)
         self._rho_over_pi = self.materials.reflectance / np.pi
@@ -310,10 +327,16 @@ class Integrator:
         """Follow rays through specular surfaces to the sky, a light or a diffuse surface.
 
         ``through`` (n, 3) is each ray's starting throughput (default 1).
-        ``portal_mis = (normals, S, n_p)`` marks hemisphere rays (S per point, cosine
-        density about ``normals``) that share their points with ``n_p`` portal samples:
-        a ray whose first hit is a portal and that goes through it gets the balance
-        heuristic weight S p_h / (S p_h + n_p p_p) (see :meth:`_portal_samples`).
+        ``portal_mis = (normals, S, n_p)`` marks rays from points that draw S cosine-
+        distributed hemisphere rays about ``normals`` (n, 3) and ``n_p`` portal samples:
+        every ray gets the weight S p_h / (S p_h + n_p p_p) (see :meth:`_portal_samples`),
+        p_p the portal density of its direction (:meth:`_portal_density`) — the openings
+        it crosses before its first hit, plus the portal glass it goes through if its first
+        hit is one and it is transmitted there.  ``portal_mis = (normals, S, n_p, reach)``
+        marks portal samples on openings instead, ``reach`` (n,) the distance to the point
+        drawn: a ray that meets a surface before it is dropped (weight 0).
+        Glass transmits and reflects by its angle of incidence
+        (:meth:`~lbl_illum.materials.MaterialTable.specular`).
 
         Returns ``(first_t, radiance, hits, mis)``: (n,) first-hit distance (inf to the
         sky), (n, 3) radiance already known (sky, lights seen by reflection), the diffuse
@@ -333,12 +356,24 @@ class Integrator:
         mis_weight = np.ones(n)
         reflected = np.zeros(n, bool)
         out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
+        if portal_mis is not None:
+            mis_normals, S, n_p = portal_mis[:3]
+            reach = portal_mis[3] if len(portal_mis) > 3 else None
         for depth in range(MAX_SPECULAR_DEPTH + 1):
             if len(ray) == 0:
                 break
             hits = self.tracer.intersect(o, d)
             if depth == 0:
                 first_t[:] = hits.t
+                if portal_mis is not None:
+                    if reach is not None:               # samples on openings: unobstructed up to them
+                        keep = hits.t > reach
+                        mis_weight[~keep] = 0.0
+                        ray, o, d, through, reflected = ray[keep], o[keep], d[keep], through[keep], reflected[keep]
+                        hits = Hits(hits.t[keep], hits.prim[keep])
+                    # (ray = its index among the n rays at depth 0)
+                    p_open = self._portal_density(d, hits.t, origins=o)
+                    mis_weight[ray] = self._hemisphere_weight(mis_normals[ray], d, p_open, S, n_p)
             esc = np.flatnonzero(~hits.hit)
             if len(esc):
                 L = self.sky.luminance(d[esc])
@@ -370,15 +405,14 @@ class Integrator:
                 break
             s_hit = hit[spec]
             s_mat = mat[spec]
-            rho = mats.reflectance[s_mat]
-            tau = mats.transmittance[s_mat]
+            ds = d[s_hit]
+            ns = Ns[spec]
+            tau, rho = mats.specular(s_mat, np.einsum("ij,ij->i", ds, ns))
             p_t = luminance(tau)
             p_r = luminance(rho)
             total = p_t + p_r
             keep = total > 0
             transmit = rng.random(len(spec)) * np.where(keep, total, 1.0) < p_t
-            ds = d[s_hit]
-            ns = Ns[spec]
             refl_dir = ds - 2.0 * np.einsum("ij,ij->i", ds, ns)[:, None] * ns
             new_d = np.where(transmit[:, None], ds, refl_dir)
             side = np.where(transmit[:, None], -Ng[spec], Ng[spec])
@@ -387,13 +421,12 @@ class Integrator:
                               rho / np.maximum(p_r, 1e-300)[:, None]) * safe
             new_through = through[s_hit] * factor
             alive = keep & (new_through.max(axis=1) > 0.0)
-            if portal_mis is not None and depth == 0:
+            if portal_mis is not None and depth == 0 and self.portals is not None:
                 through_portal = np.flatnonzero(transmit & mats.portal[s_mat])
                 if len(through_portal):
-                    normals, S, n_p = portal_mis
                     sel = s_hit[through_portal]
-                    mis_weight[ray[sel]] = self._hemisphere_weight(normals[ray[sel]], d[sel], hits.t[sel],
-                                                                   hits.prim[sel], S, n_p)
+                    density = p_open[sel] + self._portal_density(d[sel], hits.t[sel], prim=hits.prim[sel])
+                    mis_weight[ray[sel]] = self._hemisphere_weight(mis_normals[ray[sel]], d[sel], density, S, n_p)
             unit = False
             ray = ray[s_hit][alive]
             o = self.tracer.offset(P[spec][alive], side[alive])
@@ -520,33 +553,77 @@ class Integrator:
             limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
         return limit
 
-    def _portal_density(self, directions, t, prim):
-        """Solid-angle density [1/sr] of drawing ``directions`` by portal sampling, for
-        rays whose first hit is portal triangle ``prim`` at distance ``t``."""
-        k = self._portal_index[prim]
-        cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[k], directions))
-        return self.portals.pdf_area(k) * t * t / np.maximum(cos_p, 1e-300)
+    def _portal_density(self, directions, t, prim=None, origins=None):
+        """Solid-angle density [1/sr] of drawing ``directions`` by one portal sample.
 
-    def _hemisphere_weight(self, normals, directions, t, prim, S, n_p):
-        """Balance-heuristic weight of hemisphere rays that go through a portal."""
+        A point drawn on portal triangle k (area density p_A) at distance t seen under
+        cosine cos_p is the direction's density p_A t² / cos_p.  The sum covers, for rays
+        with first hits at distance ``t``:
+
+        * ``prim`` given: the portal glass triangle each ray's first hit is (entries that
+          are no portal add nothing);
+        * ``origins`` given: every opening of ``[[portals]]`` the ray crosses before t
+          (found with the openings' own tracer, nearest first; an opening counts only
+          when nothing lies between it and the point, as for its samples).
+        """
+        directions = np.asarray(directions, np.float64)
+        density = np.zeros(len(directions))
+        if prim is not None and len(directions):
+            k = self._portal_index[np.asarray(prim, np.int64)]
+            glass = np.flatnonzero(k >= 0)
+            if len(glass):
+                kk = k[glass]
+                cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], directions[glass]))
+                density[glass] = self.portals.pdf_area(kk) * t[glass] ** 2 / np.maximum(cos_p, 1e-300)
+        if origins is None or self._openings is None or len(directions) == 0:
+            return density
+        live = np.arange(len(directions))
+        o = np.asarray(origins, np.float64)
+        d, tmax, start = directions, np.asarray(t, np.float64), np.zeros(len(directions))
+        for _ in range(MAX_SPECULAR_DEPTH):
+            hits = self._openings.intersect(o, d)
+            crossed = hits.t < tmax
+            live, o, d, tmax, start, tt, prim_o = (live[crossed], o[crossed], d[crossed], tmax[crossed],
+                                                   start[crossed], hits.t[crossed], hits.prim[crossed])
+            if len(live) == 0:
+                break
+            kk = self._opening_first + prim_o
+            dist = start + tt                                 # from the ray's origin
+            cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], d))
+            density[live] += self.portals.pdf_area(kk) * dist ** 2 / np.maximum(cos_p, 1e-300)
+            step = tt + SELF_HIT_EPSILON * (np.abs(o).max(axis=1) + tt + self._openings.length_scale)
+            o = o + step[:, None] * d
+            start, tmax = start + step, tmax - step
+        return density
+
+    def _hemisphere_weight(self, normals, directions, density, S, n_p):
+        """Balance-heuristic weight S p_h / (S p_h + n_p p_p) of a ray in direction ω from
+        a point drawing S hemisphere rays (p_h = max(0, N·ω)/π) and n_p portal samples of
+        portal density p_p = ``density`` (Veach 1997, §9.2).  The same weight serves
+        hemisphere rays and portal samples (see :meth:`_portal_samples`)."""
         p_h = S * np.maximum(np.einsum("ij,ij->i", normals, directions), 0.0) / np.pi
-        p_p = n_p * self._portal_density(directions, t, prim)
-        return p_h / np.maximum(p_h + p_p, 1e-300)
+        p_p = n_p * np.asarray(density, np.float64)
+        return np.where(p_p > 0.0, p_h / np.maximum(p_h + p_p, 1e-300), 1.0)
 
     def _portal_samples(self, P, Ns, Ng, S, n_p, rng, origins=None):
         """Light through the portals seen from (P, Ns): the paper's §5 advice that large
         sources belong in the indirect step, sampled well.
 
         Each point gets ``n_p`` (about ``PORTAL_SAMPLE_FRACTION · S``) points on the
-        portals, stratified over their area.  A sample counts only if the first surface its ray
-        meets is the portal triangle it was drawn on; through the pane it carries τ and
-        continues like any ray (sky, ground, deeper levels).  Hemisphere rays through
-        portals and portal samples are combined by the balance heuristic of multiple
-        importance sampling (Veach, "Robust Monte Carlo Methods for Light Transport
-        Simulation", 1997, §9.2): a sample in direction ω counts f(ω) / (S p_h + n_p p_p)
-        with p_h = cos θ / π and p_p the portal density, so cosine sampling carries the
-        light near a window and area sampling the small distant windows.  Values are
-        scaled by S/π to join the hemisphere sums of Eq. 2.
+        portals — portal glass and the openings of ``[[portals]]`` — stratified over their
+        area.  A sample on portal glass counts only if the first surface its ray meets is
+        the portal triangle it was drawn on; through the pane it carries τ(θ) and
+        continues like any ray (sky, ground, deeper levels).  A sample on an opening
+        counts only if nothing lies between the point and it; its ray goes on from the
+        point like any ray, since openings are invisible to every other ray.
+        Hemisphere rays and portal samples are combined by the balance heuristic of
+        multiple importance sampling (Veach, "Robust Monte Carlo Methods for Light
+        Transport Simulation", 1997, §9.2): a sample in direction ω counts
+        f(ω) / (S p_h + n_p p_p) with p_h = cos θ / π and p_p the portal density
+        (:meth:`_portal_density`), so cosine sampling carries the light near a window and
+        area sampling the small distant windows.  Values are scaled by S/π to join the
+        hemisphere sums of Eq. 2, which makes a sample's factor the weight S p_h /
+        (S p_h + n_p p_p) of :meth:`_hemisphere_weight`.
 
         Returns ``(known, hits, owner)`` like the hemisphere part.
         """
@@ -558,24 +635,45 @@ class Integrator:
         dist = np.linalg.norm(w, axis=1)
         w /= np.maximum(dist, 1e-300)[:, None]
         cos_r = np.einsum("ij,ij->i", Ns[owner], w)
-        use = np.flatnonzero((cos_r > 0.0) & (dist > 0.0))
-        hits = self.tracer.intersect(o[use], w[use])
-        first = hits.prim == self.portals.ids[tri[use]]
-        use = use[first]
+        usable = (cos_r > 0.0) & (dist > 0.0)
+        target = self._portal_prim[tri]
         known = np.zeros((r, 3))
-        empty = {"P": np.zeros((0, 3)), "Ns": np.zeros((0, 3)), "Ng": np.zeros((0, 3)), "weight": np.zeros((0, 3))}
-        if len(use) == 0:
-            return known, empty, np.zeros(0, np.int64)
-        sub = Hits(hits.t[first], hits.prim[first])
-        Pp, Ngp, _ = self.tracer.surface(o[use], w[use], sub, np.arange(len(use)))
-        tau = self.materials.transmittance[self.scene.triangles.material[sub.prim]]
-        p_p = n_p * self._portal_density(w[use], sub.t, sub.prim)
-        p_h = S * cos_r[use] / np.pi
-        through = tau * (cos_r[use] * S / np.pi / (p_h + p_p))[:, None]
-        _, radiance, p_hits, _ = self.trace_paths(self.tracer.offset(Pp, -Ngp), w[use], rng, through=through)
-        for c in range(3):
-            known[:, c] = np.bincount(owner[use], radiance[:, c], minlength=r)
-        return known, {key: p_hits[key] for key in empty}, owner[use][p_hits["ray"]]
+        keys = ("P", "Ns", "Ng", "weight")
+        parts, owners = [], []
+
+        def add(use, radiance, p_hits, weight):
+            for c in range(3):
+                known[:, c] += np.bincount(owner[use], radiance[:, c] * weight, minlength=r)
+            if len(p_hits["ray"]):
+                parts.append({**{key: p_hits[key] for key in keys[:3]},
+                              "weight": p_hits["weight"] * weight[p_hits["ray"], None]})
+                owners.append(owner[use][p_hits["ray"]])
+
+        # portal glass: through the pane drawn on, if it is the first surface met
+        use = np.flatnonzero(usable & (target >= 0))
+        if len(use):
+            hits = self.tracer.intersect(o[use], w[use])
+            first = hits.prim == target[use]
+            use = use[first]
+            if len(use):
+                sub = Hits(hits.t[first], hits.prim[first])
+                Pp, Ngp, _ = self.tracer.surface(o[use], w[use], sub, np.arange(len(use)))
+                cos_p = np.einsum("ij,ij->i", self.tracer.normals[sub.prim], w[use])
+                tau = self.materials.glass_transmittance(self.scene.triangles.material[sub.prim], cos_p)
+                density = self._portal_density(w[use], sub.t, prim=sub.prim, origins=o[use])
+                weight = self._hemisphere_weight(Ns[owner[use]], w[use], density, S, n_p)
+                _, radiance, p_hits, _ = self.trace_paths(self.tracer.offset(Pp, -Ngp), w[use], rng, through=tau)
+                add(use, radiance, p_hits, weight)
+        # openings: unobstructed up to the point drawn, then on like any ray
+        use = np.flatnonzero(usable & (target < 0))
+        if len(use):
+            _, radiance, p_hits, weight = self.trace_paths(o[use], w[use], rng,
+                                                           portal_mis=(Ns[owner[use]], S, n_p, dist[use]))
+            add(use, radiance, p_hits, weight)
+        if not parts:
+            return known, {key: np.zeros((0, 3)) for key in keys}, np.zeros(0, np.int64)
+        hits = {key: np.concatenate([part[key] for part in parts]) for key in keys}
+        return known, hits, np.concatenate(owners)
 
     def _trace_records(self, k, P, Ns, Ng, pending: _Pending, key: int):
         """:meth:`_evaluate_hemispheres` for new records of level k, in blocks of at most
@@ -705,9 +803,64 @@ class Integrator:
                 lv.Gr[rec], lv.Gt[rec] = limit_gradients(
                     lv.E[rec], rot, trans, lv.accuracy * lv.R[rec].astype(np.float64), lv.accuracy)
 
+    # -- cache files ---------------------------------------------------------------------
+    #: the cache file of :meth:`attach_cache_file` (None: the cache is kept in memory only)
+    cache_file = None
+
+    def attach_cache_file(self, path, rebuild: bool = False) -> None:
+        """Keep the cache in the file ``path`` (docs/cache-files.md).
+
+        Its records are read now (unless it does not exist, or ``rebuild`` is true) and
+        the cache is written back at the end of every :meth:`compute` — merged, under the
+        file's lock, with records other processes added meanwhile.  A damaged file, or
+        one made for another scene or other settings, is refused with an
+        :class:`~lbl_illum.errors.InputError`; with ``rebuild`` it is replaced instead.
+        A :meth:`compute` that is interrupted (Ctrl-C, SIGTERM, an error) writes the
+        records of the levels it has evaluated (see :meth:`compute`).  Records read
+        replace those the integrator held.
+        """
+        from .cache import CacheFile, record_settings
+
+        cache_file = CacheFile(path, rebuild)
+        cache = cache_file.read(self.fingerprint, record_settings(self.scene, self.options))
+        self.cache_file = cache_file
+        if cache is not None:
+            self.cache = cache
+
+    def _keep_evaluated(self, start, evaluated) -> bool:
+        """After an interruption: drop the records of the levels not in ``evaluated``
+        that this run placed (they have no values yet), restoring each such level's
+        octree root from ``start`` — (count, center, half) per level at the start.
+        Returns whether an evaluated level gained records."""
+        gained = False
+        for k, lv in enumerate(self.cache.levels):
+            count, center, half = start[k]
+            if lv.count > count:
+                if k in evaluated:
+                    gained = gained or lv.accuracy > 0
+                else:
+                    lv.truncate(count, center, half)
+        return gained
+
     # -- the whole calculation -----------------------------------------------------------
     def compute(self, points, normals) -> IlluminanceResult:
-        """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``."""
+        """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``.
+
+        Interruptions.  Records are placed top-down and get their values bottom-up, so
+        when the calculation stops early (KeyboardInterrupt, SIGTERM with a cache file
+        attached, any exception) the levels it has evaluated hold complete records and
+        the others hold records without values.  Those are dropped (each level returns
+        to the records and octree it had before), the rest is kept and, with a cache
+        file attached (:meth:`attach_cache_file`), written before the exception goes
+        on; the exception then carries ``saved_cache`` (the file) and
+        ``saved_records`` (records per level in it).  A second run over the same points
+        with the same file and seed places the unevaluated levels exactly as the first
+        did (their records and random streams are the same), finds every query of the
+        next level covered by the kept records, and so gives bit-identical results to a
+        run that was never interrupted.
+        """
+        from .cache import deferred_interrupts, record_settings, sigterm_as_interrupt
+
         t0 = time.perf_counter()
         self._rays_reported = rays_before = self.tracer.rays_traced
         points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
@@ -717,6 +870,8 @@ class Integrator:
         stats = RunStats(new_records=[0] * (B + 1), queries=[0] * (B + 1))
         if self.cache is None:
             self.cache = self._new_cache(points)
+        if self.cache.settings is None:
+            self.cache.settings = record_settings(self.scene, self.options)
         # the spacing probe traces rays: skip it when no level can hold light (nothing
         # indirect is computed) or when both limits are given
         probe = (len(points) > 0 and self._level_active(0)
@@ -730,41 +885,58 @@ class Integrator:
         stats.min_spacing, stats.max_spacing = self.min_spacing, self.max_spacing
         self._roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
 
-        # placement, level by level
-        levels = []          # (pending, own_record, query arrays) per level
-        qP, qNs, qNg = points, normals, normals
-        for k in range(B + 1):
-            if not self._level_active(k) or len(qP) == 0:
-                break
-            self._tick(f"placing level {k} ({len(qP)} queries)")
-            pending, own = self.place_level(k, qP, qNs, qNg, stats)
-            levels.append((pending, own, qP, qNs))
-            qP, qNs, qNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
-            if k + 1 > B or not self._level_active(k + 1):
-                break
+        # what each level held before this run, to return to if it is interrupted
+        start = [(lv.count, lv.node_center[0].copy(), float(lv.node_half[0])) for lv in self.cache.levels]
+        evaluated = set()
+        with sigterm_as_interrupt() if self.cache_file is not None else contextlib.nullcontext():
+            try:
+                # placement, level by level
+                levels = []          # (pending, own_record, query arrays) per level
+                qP, qNs, qNg = points, normals, normals
+                for k in range(B + 1):
+                    if not self._level_active(k) or len(qP) == 0:
+                        break
+                    self._tick(f"placing level {k} ({len(qP)} queries)")
+                    pending, own = self.place_level(k, qP, qNs, qNg, stats)
+                    levels.append((pending, own, qP, qNs))
+                    qP, qNs, qNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
+                    if k + 1 > B or not self._level_active(k + 1):
+                        break
 
-        # evaluation, deepest level first
-        next_answer = None
-        for k in range(len(levels) - 1, -1, -1):
-            self._tick(f"evaluating level {k}")
-            pending, _, _, _ = levels[k]
-            if k + 1 < len(levels):
-                _, own_next, P_next, N_next = levels[k + 1]
-                next_answer = self._answer(k + 1, P_next, N_next, own_next)
-            else:
+                # evaluation, deepest level first
                 next_answer = None
-            self.evaluate_level(k, pending, next_answer)
+                for k in range(len(levels) - 1, -1, -1):
+                    self._tick(f"evaluating level {k}")
+                    pending, _, _, _ = levels[k]
+                    if k + 1 < len(levels):
+                        _, own_next, P_next, N_next = levels[k + 1]
+                        next_answer = self._answer(k + 1, P_next, N_next, own_next)
+                    else:
+                        next_answer = None
+                    self.evaluate_level(k, pending, next_answer)
+                    evaluated.add(k)
+                evaluated.update(range(len(self.cache.levels)))
 
-        # answers at the query points
-        self._tick("direct light at the points")
-        origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
-        direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
-                                         light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
-        if levels:
-            _, own0, _, _ = levels[0]
-            indirect = self._answer(0, points, normals, own0)
-        else:
-            indirect = np.zeros_like(direct)
+                # answers at the query points
+                self._tick("direct light at the points")
+                origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
+                direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
+                                                 light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
+                if levels:
+                    _, own0, _, _ = levels[0]
+                    indirect = self._answer(0, points, normals, own0)
+                else:
+                    indirect = np.zeros_like(direct)
+            except BaseException as exc:
+                with deferred_interrupts():
+                    gained = self._keep_evaluated(start, evaluated)
+                    if self.cache_file is not None and gained:
+                        exc.saved_records = self.cache_file.write(self.cache)
+                        exc.saved_cache = str(self.cache_file.path)
+                raise
+            if self.cache_file is not None:
+                self._tick("writing the cache file")
+                self.cache_file.write(self.cache)
         self._tick("done")
         stats.records = self.cache.record_counts
         stats.rays = self.tracer.rays_traced - rays_before
@@ -773,8 +945,14 @@ class Integrator:
 
 
 def compute_illuminance(scene: Scene, points, normals, options: Options | None = None,
-                        cache: IrradianceCache | None = None, progress=None) -> IlluminanceResult:
+                        cache: IrradianceCache | None = None, progress=None, cache_file=None,
+                        rebuild_cache: bool = False) -> IlluminanceResult:
     """Illuminance [lux] at sensor ``points`` [m] facing ``normals``: direct + indirect.
+
+    ``cache_file`` (a path) keeps the records in a file: read first, written at the end
+    and on interruption, merged with other processes' records
+    (:meth:`Integrator.attach_cache_file`; ``rebuild_cache`` replaces a file made for
+    other settings instead of refusing it).
 
     Example
     -------
@@ -784,4 +962,6 @@ def compute_illuminance(scene: Scene, points, normals, options: Options | None =
     >>> compute_illuminance(scene, pts, nrm).illuminance.mean()   # doctest: +SKIP
     """
     integ = Integrator(scene, options, cache, progress)
+    if cache_file is not None:
+        integ.attach_cache_file(cache_file, rebuild=rebuild_cache)
     return integ.compute(points, normals)

@@ -35,8 +35,14 @@ option                 default  meaning
 **Presets** (``--preset`` on the command line, ``preset = "..."`` under ``[settings]``)
 name a point on the measured speed–accuracy front of the office example
 (``lbl-illum validate office-tradeoff``; see :data:`PRESETS`).  A preset sets
-``accuracy``, ``samples``, ``bounces`` and ``point_samples``; options given
-explicitly win over it.
+``accuracy``, ``samples``, ``bounces``, ``point_samples`` and ``interpolation``;
+options given explicitly win over it.
+
+The defaults in the table are the engine's plain settings, the paper's method (the
+cache starts at the query points) with gradients; they are what ``Options()`` holds.  A
+*scene* without a preset or options of its own gets :data:`DEFAULT_PRESET` instead
+(:func:`scene_defaults`), the most accurate point of the measured front: that is what
+``lbl-illum illuminance`` runs when told nothing.
 
 ``auto`` spacings are derived from the extent of what is computed (the sensor
 points), never from the scene's bounding box: see :func:`lbl_illum.integrator.default_spacing`.
@@ -51,7 +57,7 @@ from typing import Any, Mapping
 
 from .errors import InputError, check_keys
 
-__all__ = ["Options", "PRESETS", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
+__all__ = ["Options", "PRESETS", "DEFAULT_PRESET", "scene_defaults", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
 
 #: §3.4: factor on ``a`` per deeper diffuse level ...
 BOUNCE_ACCURACY_FACTOR = 1.4
@@ -74,23 +80,35 @@ MIN_DEEP_SAMPLES = 16
 
 #: Quality presets, chosen from the Pareto front of seconds against error that the
 #: ``office-tradeoff`` study measures (docs/validation/office-tradeoff/report.md).
-#: Each sets exactly these four options.
+#: Each sets exactly these five options.  On the office every
+#: point of the front below 2 % mean error evaluates the sensors alone (point samples)
+#: and caches the reflections with the Hessian's elliptical domains
+#: (docs/performance/interpolation/report.md compares the rules at equal time).
 PRESETS: dict[str, dict[str, Any]] = {
-    "draft": {"accuracy": 0.2, "samples": 256, "bounces": 8, "point_samples": None},
-    "low": {"accuracy": 0.15, "samples": 256, "bounces": 8, "point_samples": None},
-    "medium": {"accuracy": 0.14, "samples": 256, "bounces": 8, "point_samples": 1024},
-    "high": {"accuracy": 0.1, "samples": 1024, "bounces": 8, "point_samples": None},
+    "draft": {"accuracy": 0.12, "samples": 64, "bounces": 8, "point_samples": 512, "interpolation": "hessian"},
+    "low": {"accuracy": 0.12, "samples": 128, "bounces": 8, "point_samples": 1024, "interpolation": "hessian"},
+    "medium": {"accuracy": 0.1, "samples": 128, "bounces": 8, "point_samples": 1024, "interpolation": "hessian"},
+    "high": {"accuracy": 0.07, "samples": 128, "bounces": 8, "point_samples": 4096, "interpolation": "hessian"},
 }
 
 #: What each preset measured on examples/office (77 sensors, CIE overcast sky, 2 cores)
 #: against the converged reference: (seconds, mean relative error, max relative error).
 #: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
 PRESET_MEASURED: dict[str, tuple[float, float, float]] = {
-    "draft": (0.38, 0.0199, 0.0567),
-    "low": (0.86, 0.0166, 0.0500),
-    "medium": (4.02, 0.0072, 0.0200),
-    "high": (12.85, 0.0043, 0.0164),
+    "draft": (0.69, 0.0151, 0.0359),
+    "low": (1.34, 0.0081, 0.0226),
+    "medium": (2.03, 0.0068, 0.0214),
+    "high": (5.83, 0.0028, 0.0109),
 }
+
+
+#: The preset a scene's options start from (see the module docstring).
+DEFAULT_PRESET = "high"
+
+
+def scene_defaults() -> "Options":
+    """The options of a scene that sets none: :data:`DEFAULT_PRESET`."""
+    return Options().with_preset(DEFAULT_PRESET)
 
 
 def preset_table() -> str:

@@ -5,21 +5,23 @@ RADIANCE Lighting Simulation and Rendering System", SIGGRAPH 1994; Larson & Shak
 *Rendering with Radiance*, 1998) that describes the same light transport as ours, so that
 ``oconv`` and ``rtrace -I`` compute the same illuminance at the same sensor points:
 
-=================  ===================================================================
-file               contents
-=================  ===================================================================
-``materials.rad``  one Radiance material per scene material (see :func:`material_primitive`)
-``sky.rad``        the sky and ground glow (``brightfunc`` ``skyfunc`` on two ``glow``
-                   hemispheres) and the sun (a ``light`` ``source``)
-``lbl_sky.cal``    the sky luminance models of :mod:`lbl_illum.sky` in Radiance's ``.cal``
-                   language (only when there is a sky)
-``geometry.rad``   triangles as ``polygon`` s grouped by material, sphere primitives as
-                   ``sphere`` s, and, for large scenes, one ``mesh`` primitive
-``geometry.obj``,  the large-scene path: the plastic and glass triangles as a Wavefront
-``geometry.rtm``   OBJ compiled by ``obj2mesh`` (far faster to ``oconv`` than polygons)
-``points.pts``     the sensor points, ``x y z nx ny nz`` per line [m]
-``README.txt``     the ``oconv`` and ``rtrace`` command lines that reproduce a run
-=================  ===================================================================
+===================  =================================================================
+file                 contents
+===================  =================================================================
+``materials.rad``    one Radiance material per scene material (see :func:`material_primitive`)
+``sky.rad``          the sky and ground glow (``brightfunc`` ``skyfunc`` on two ``glow``
+                     hemispheres) and the sun (a ``light`` ``source``)
+``lbl_sky.cal``      the sky luminance models of :mod:`lbl_illum.sky` in Radiance's ``.cal``
+                     language (only when there is a sky)
+``lbl_glazing.cal``  the Fresnel glazing of :mod:`lbl_illum.materials` for ``BRTDfunc``
+                     (:data:`GLAZING_CAL`; only when a double pane is exported)
+``geometry.rad``     triangles as ``polygon`` s grouped by material, sphere primitives as
+                     ``sphere`` s, and, for large scenes, one ``mesh`` primitive
+``geometry.obj``,    the large-scene path: the plastic and glass triangles as a Wavefront
+``geometry.rtm``     OBJ compiled by ``obj2mesh`` (far faster to ``oconv`` than polygons)
+``points.pts``       the sensor points, ``x y z nx ny nz`` per line [m]
+``README.txt``       the ``oconv`` and ``rtrace`` command lines that reproduce a run
+===================  =================================================================
 
 Units.  Lengths are in metres (the scene's lengths after ``Scene.unit_scale``).  Light:
 our RGB channels are photometric (a grey (L, L, L) has luminance L cd/m²,
@@ -49,14 +51,15 @@ from . import __version__
 from .errors import InputError
 from .files import atomic_write_text
 from .geometry import SPHERE_SUBDIVISIONS
-from .materials import GLASS_INDEX, Material
+from .materials import GLASS_INDEX, Material, pane_transmissivity
 from .sun import SUN_SOLID_ANGLE
 
 __all__ = [
     "RADIANCE_EFFICACY", "RADIANCE_RGB_WEIGHTS", "MESH_THRESHOLD", "GLASS_MODELS", "SKY_MODEL_CODES",
     "RadianceExport", "export_radiance", "radiance_programs", "illuminance_from_rtrace",
     "to_radiance", "from_radiance", "glass_transmissivity", "glass_transmittance", "sun_source_angle",
-    "material_primitive", "sky_description", "ambient_options", "radiance_name", "merge_coplanar",
+    "material_primitive", "glass_export", "GLAZING_CAL", "sky_description", "ambient_options", "radiance_name",
+    "merge_coplanar",
 ]
 
 #: Radiance's luminous efficacy of its white light [lm/W] (``WHTEFFICACY`` in color.h).
@@ -66,9 +69,12 @@ RADIANCE_RGB_WEIGHTS = (0.265, 0.670, 0.065)
 #: Above this many plastic/glass triangles, and when ``obj2mesh`` is found, the geometry
 #: goes into one compiled ``mesh`` instead of one ``polygon`` per triangle.
 MESH_THRESHOLD = 20_000
-#: Ways of writing our glass: Radiance's ``glass`` (Fresnel angle dependence) or a
-#: ``BRTDfunc`` with constant coefficients (exactly our angle-independent model).
-GLASS_MODELS = ("glass", "brtdfunc")
+#: Ways of writing our glass (:func:`material_primitive`): ``auto`` the equivalent of each
+#: glass's model (Fresnel single pane → ``glass``, Fresnel double pane → ``BRTDfunc`` with
+#: ``lbl_glazing.cal``, constant → ``BRTDfunc`` with constants); ``glass`` Radiance's
+#: ``glass`` for every glass; ``brtdfunc`` constant coefficients (the normal-incidence
+#: values) for every glass.
+GLASS_MODELS = ("auto", "glass", "brtdfunc")
 #: Sky models of :mod:`lbl_illum.sky` and their selector (A1) in ``lbl_sky.cal``.
 SKY_MODEL_CODES = {"uniform": 1, "cie-overcast": 2, "cie-general": 3, "perez": 4}
 #: Offset [m] of the two back-to-back copies of a ``light`` or ``mirror`` surface: Radiance
@@ -91,6 +97,7 @@ _SCENE_FILES = ("materials.rad", "sky.rad", "geometry.rad")
 _OCTREE = "scene.oct"
 _POINTS = "points.pts"
 _CAL = "lbl_sky.cal"
+_GLAZING_CAL = "lbl_glazing.cal"
 
 
 # ---------------------------------------------------------------------------
@@ -128,19 +135,15 @@ def glass_transmittance(transmissivity, index: float = GLASS_INDEX):
 def glass_transmissivity(transmittance, index: float = GLASS_INDEX):
     """Transmissivity tn that gives Radiance's ``glass`` the normal-incidence transmittance T.
 
-    The inverse of :func:`glass_transmittance`, the positive root of
+    The inverse of :func:`glass_transmittance` (one pane of
+    :func:`lbl_illum.materials.pane_transmissivity`), the positive root of
     T r² tn² + (1 − r)² tn − T = 0:  tn = (√((1 − r)⁴ + 4 r² T²) − (1 − r)²) / (2 r² T).
     For n = 1.52 this is the formula of Radiance's glass.c and reference manual,
     tn = (√(0.8402528435 + 0.0072522239 T²) − 0.9166530661) / 0.0036261119 / T, here with
     unrounded constants (the rounded ones lose 1e-4 of T at T = 0.01 to cancellation).
     T = 0 gives 0; clear glass (T = 0.88) gives 0.96.
     """
-    T = np.asarray(transmittance, dtype=np.float64)
-    r = _pane_reflection(index)
-    a, b = (1.0 - r) ** 2, r * r
-    safe = np.where(T > 0.0, T, 1.0)
-    tn = (np.sqrt(a * a + 4.0 * b * safe * safe) - a) / (2.0 * b * safe)
-    return np.where(T > 0.0, tn, 0.0)
+    return pane_transmissivity(transmittance, index, 1)
 
 
 def sun_source_angle() -> float:
@@ -172,15 +175,69 @@ def _rgb(values) -> str:
     return " ".join(_g(v) for v in values)
 
 
-def material_primitive(rad_name: str, material: Material, glass: str = "glass") -> str:
+GLAZING_CAL = """\
+{ lbl_glazing.cal: the Fresnel glazing of lbl_illum (lbl_illum/materials.py), written by
+  lbl-illum export radiance, for
+    void BRTDfunc NAME
+    10 glz_rr glz_rg glz_rb glz_tr glz_tg glz_tb 0 0 0 lbl_glazing.cal
+    0
+    14 0 0 0 0 0 0 0 0 0 n tn_r tn_g tn_b panes
+  n: refractive index;  tn: internal transmissivity of each pane at normal incidence;
+  panes: 1 or 2.  One pane is Radiance's glass (glass.c) exactly: two interfaces, all
+  internal reflections summed, s and p polarisations averaged.  Two identical panes sum
+  the reflections between them per polarisation.  The ray goes straight through. }
+
+sq(x) = x*x;
+glz_n = arg(10);
+glz_ci = if(abs(RdotP) - 1e-9, abs(RdotP), 1e-9);
+glz_ct = sqrt(1 - (1 - glz_ci*glz_ci)/(glz_n*glz_n));
+glz_rs = sq((glz_ci - glz_n*glz_ct)/(glz_ci + glz_n*glz_ct));
+glz_rp = sq((glz_ct - glz_n*glz_ci)/(glz_ct + glz_n*glz_ci));
+{ internal transmittance along the refracted path: tn^(1/cos theta_t) }
+glz_d(tn) = if(tn - 1e-30, exp(log(tn)/glz_ct), 0);
+{ one pane of interface reflectance r and internal transmittance d }
+pane_t(r, d) = sq(1 - r)*d/(1 - sq(r*d));
+pane_r(r, d) = r*(1 + (1 - 2*r)*d*d)/(1 - sq(r*d));
+{ two identical panes }
+unit_t(r, d) = sq(pane_t(r, d))/(1 - sq(pane_r(r, d)));
+unit_r(r, d) = pane_r(r, d) + sq(pane_t(r, d))*pane_r(r, d)/(1 - sq(pane_r(r, d)));
+glz_t(r, d) = select(arg(14), pane_t(r, d), unit_t(r, d));
+glz_r(r, d) = select(arg(14), pane_r(r, d), unit_r(r, d));
+glz_trans(tn) = (glz_t(glz_rs, glz_d(tn)) + glz_t(glz_rp, glz_d(tn)))/2;
+glz_refl(tn) = (glz_r(glz_rs, glz_d(tn)) + glz_r(glz_rp, glz_d(tn)))/2;
+
+glz_tr = glz_trans(arg(11));  glz_tg = glz_trans(arg(12));  glz_tb = glz_trans(arg(13));
+glz_rr = glz_refl(arg(11));   glz_rg = glz_refl(arg(12));   glz_rb = glz_refl(arg(13));
+"""
+
+
+def glass_export(material: Material, glass: str = "auto") -> str:
+    """How :func:`material_primitive` writes a glass: ``"glass"`` (Radiance's ``glass``),
+    ``"brtdfunc-cal"`` (``BRTDfunc`` with :data:`GLAZING_CAL`) or ``"brtdfunc"``
+    (``BRTDfunc`` with constant coefficients)."""
+    if glass not in GLASS_MODELS:
+        raise ValueError(f"glass model must be one of {GLASS_MODELS}, got {glass!r}")
+    if glass == "glass":
+        return "glass"
+    if glass == "brtdfunc" or not material.fresnel:
+        return "brtdfunc"
+    return "glass" if material.panes == 1 else "brtdfunc-cal"
+
+
+def material_primitive(rad_name: str, material: Material, glass: str = "auto") -> str:
     """Radiance description of one material, named ``rad_name``.
 
     * ``diffuse`` → ``plastic`` with the reflectance RGB, specularity 0, roughness 0
       (plastic without a specular part is Lambertian);
-    * ``glass`` → ``glass`` with transmissivity from :func:`glass_transmissivity` (its
-      reflectance follows from n = 1.52, which is also our default), or, with
-      ``glass = "brtdfunc"``, a ``BRTDfunc`` with constant specular reflectance and
-      transmittance and no diffuse part: our angle-independent, non-refracting pane;
+    * ``glass`` with ``glass = "auto"`` (default), the equivalent of its model:
+      Fresnel, one pane → ``glass`` with transmissivity from :func:`glass_transmissivity`
+      (and the refractive index as a fourth argument when it is not 1.52); Fresnel, two
+      panes → ``BRTDfunc`` whose coefficients are the functions of ``lbl_glazing.cal``
+      (:data:`GLAZING_CAL`, written by the export); constant → ``BRTDfunc`` with constant
+      specular reflectance and transmittance and no diffuse part.  ``glass = "glass"``
+      writes every glass as Radiance's ``glass`` with the same normal-incidence
+      transmittance, ``"brtdfunc"`` every glass with constant (normal-incidence)
+      coefficients: both only approximate the glass of another model;
     * ``mirror`` → ``mirror`` with the reflectance RGB;
     * ``light`` → ``light`` with radiance = luminance / 179 per channel.
     """
@@ -191,14 +248,21 @@ def material_primitive(rad_name: str, material: Material, glass: str = "glass") 
     if material.kind == "light":
         return f"void light {rad_name}\n0\n0\n3 {_rgb(to_radiance(material.luminance))}\n"
     if material.kind == "glass":
-        if glass == "brtdfunc":
+        how = glass_export(material, glass)
+        if how == "brtdfunc":
             refl = " ".join(_g(v) for v in material.reflectance)
             trans = " ".join(_g(v) for v in material.transmittance)
             return (f"void BRTDfunc {rad_name}\n10 {refl} {trans} 0 0 0 .\n0\n"
                     "9 0 0 0 0 0 0 0 0 0\n")
-        if glass != "glass":
-            raise ValueError(f"glass model must be one of {GLASS_MODELS}, got {glass!r}")
-        return f"void glass {rad_name}\n0\n0\n3 {_rgb(glass_transmissivity(material.transmittance))}\n"
+        index = material.index if material.fresnel else GLASS_INDEX
+        if how == "brtdfunc-cal":
+            tn = pane_transmissivity(np.array(material.transmittance, np.float64), index, material.panes)
+            return (f"void BRTDfunc {rad_name}\n10 glz_rr glz_rg glz_rb glz_tr glz_tg glz_tb 0 0 0 {_GLAZING_CAL}\n"
+                    f"0\n14 0 0 0 0 0 0 0 0 0 {_g(index)} {_rgb(tn)} {material.panes}\n")
+        tn = glass_transmissivity(material.transmittance, index)
+        if index == GLASS_INDEX:
+            return f"void glass {rad_name}\n0\n0\n3 {_rgb(tn)}\n"
+        return f"void glass {rad_name}\n0\n0\n4 {_rgb(tn)} {_g(index)}\n"
     raise ValueError(f"unknown material kind {material.kind!r}")
 
 
@@ -605,16 +669,18 @@ def _bounds(scene) -> np.ndarray:
     return np.stack([lo, hi])
 
 
-def export_radiance(scene, directory, points=None, normals=None, *, glass: str = "brtdfunc",
+def export_radiance(scene, directory, points=None, normals=None, *, glass: str = "auto",
                     mesh: bool | None = None, mesh_threshold: int = MESH_THRESHOLD,
                     progress: Callable[[str], None] | None = None) -> RadianceExport:
     """Write ``scene`` as a Radiance scene into ``directory`` (see the module docstring).
 
     points, normals : optional (n, 3) sensor points [m] and normals, written to
         ``points.pts`` and used for the automatic ``-ar``
-    glass : ``"brtdfunc"`` (default: constant coefficients, our angle-independent glass
-        exactly) or ``"glass"`` (Radiance's glass, with its Fresnel angle dependence: on
-        the office example 7.5 % less daylight); see :func:`material_primitive`
+    glass : ``"auto"`` (default: each glass as the Radiance material equivalent to its
+        model — Fresnel single pane ``glass``, Fresnel double pane ``BRTDfunc`` with
+        ``lbl_glazing.cal``, constant ``BRTDfunc`` with constants), ``"glass"`` (Radiance's
+        ``glass`` for every glass) or ``"brtdfunc"`` (constant normal-incidence coefficients
+        for every glass); see :func:`material_primitive`
     mesh : True: compile the plastic and glass triangles with ``obj2mesh`` into one
         ``mesh`` (an error when ``obj2mesh`` is not found); False: polygons; None
         (default): the mesh when there are more than ``mesh_threshold`` of them and
@@ -704,6 +770,8 @@ def export_radiance(scene, directory, points=None, normals=None, *, glass: str =
     files = {"materials.rad": materials_text, "sky.rad": sky_text, "geometry.rad": "".join(geo)}
     if cal_text is not None:
         files[_CAL] = cal_text
+    if any(m.kind == "glass" and glass_export(m, glass) == "brtdfunc-cal" for m in scene.materials):
+        files[_GLAZING_CAL] = GLAZING_CAL
     if obj_text is not None:
         files["geometry.obj"] = obj_text
     if points is not None:
@@ -743,6 +811,14 @@ def export_radiance(scene, directory, points=None, normals=None, *, glass: str =
     return result
 
 
+def _glass_note(scene, glass) -> str:
+    """What the export made of the scene's glass, for README.txt."""
+    words = {"glass": "glass (Fresnel)", "brtdfunc": "BRTDfunc with constant coefficients",
+             "brtdfunc-cal": "BRTDfunc with the Fresnel double glazing of lbl_glazing.cal"}
+    used = dict.fromkeys(glass_export(m, glass) for m in scene.materials if m.kind == "glass")
+    return " or ".join(words[u] for u in used) if used else "none here"
+
+
 def _readme(scene, ex: RadianceExport, max_spacing, cube, glass) -> str:
     """README.txt: what the files are and the commands that reproduce a run."""
     o = scene.options
@@ -759,8 +835,7 @@ def _readme(scene, ex: RadianceExport, max_spacing, cube, glass) -> str:
         "per RGB channel; illuminance [lux] = 179 x Radiance irradiance [W/m2].",
         "",
         "Files",
-        "  materials.rad  materials (diffuse -> plastic, glass -> "
-        + ("glass" if glass == "glass" else "BRTDfunc with constant coefficients")
+        "  materials.rad  materials (diffuse -> plastic, glass -> " + _glass_note(scene, glass)
         + ", mirror -> mirror, light -> light)",
         "  sky.rad        sky and ground glow (brightfunc skyfunc, lbl_sky.cal) and the sun",
         "  geometry.rad   surfaces" + (" (plastic and glass triangles in geometry.rtm)" if ex.mesh else ""),

@@ -2,7 +2,10 @@
 
 A scene file (schema 1) has the top-level keys ``schema`` (optional, 1), ``units``
 (m, cm, mm, km, ft, in; default m), ``[[geometry]]`` entries, ``[materials.NAME]``
-tables, ``[sky]``, ``[sun]``, ``[site]`` and ``[settings]``.  The daylight tables
+tables, ``[sky]``, ``[sun]``, ``[site]``, ``[[portals]]`` entries and ``[settings]``.
+A ``[[portals]]`` entry (``vertices = [[x, y, z], ...]``, optional ``name``) is a planar
+polygon over an unglazed opening: no ray sees it, and the indirect calculation samples
+its area like portal glass (docs/windows.md).  The daylight tables
 (``[sky]``, ``[sun]``, ``[site]``, and a ``weather`` file named in ``[sky]``) are read by
 :func:`daylight_from_dict`; docs/daylight.md describes them.  A geometry entry either loads
 a file (``file``, relative to the scene file, with a default ``material`` and a ``materials``
@@ -35,25 +38,36 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
-from .errors import InputError, check_keys, get_number, plural
-from .geometry import Triangles, degenerate_mask, duplicate_mask, load_mesh_file, shape_from_table
+from .errors import InputError, check_keys, get_number, get_vector, plural, show
+from .geometry import (MAX_COORDINATE, Triangles, degenerate_mask, duplicate_mask, load_mesh_file,
+                       polygon_triangles, shape_from_table)
 from .materials import Material, MaterialTable, material_from_table
-from .options import Options
+from .options import Options, scene_defaults
 from .sky import CIEGeneralSky, PerezSky, Sky, perez_sky_from_weather, sky_from_table
 from .solar import day_of_year, read_epw, site_from_table, solar_position, to_utc
 from .sun import Sun, sun_from_table, sun_position_at
 from .units import metres_per_unit
 
-__all__ = ["Scene", "load_scene", "scene_from_dict", "daylight_from_dict", "SCHEMA", "TOP_LEVEL_KEYS"]
+__all__ = ["Scene", "load_scene", "scene_from_dict", "daylight_from_dict", "SCHEMA", "TOP_LEVEL_KEYS",
+           "MAX_BOUNCES"]
 
 #: The scene-file schema this version reads.
 SCHEMA = 1
 #: Keys allowed at the top of a scene file.
-TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "site", "settings")
+TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "site", "portals", "settings")
+#: Keys of a ``[[portals]]`` entry.
+PORTAL_KEYS = ("vertices", "name")
 #: ``weather_values``: take the weather file's illuminances, or convert its irradiances.
 WEATHER_VALUES = ("illuminance", "irradiance")
 #: Keys of a ``[[geometry]]`` entry that loads a file.
 FILE_KEYS = ("file", "material", "materials")
+#: Most diffuse bounces a scene's ``[settings]`` (or the command line) may ask for.  The
+#: engine keeps bounces + 1 levels of records and a cache file holds at most 1024; the
+#: integrating-sphere study converges ρ = 0.9 within 0.5 % in 46 bounces.
+MAX_BOUNCES = 1000
+#: TOML integers are 64-bit (TOML 1.0: "if an integer cannot be represented losslessly, an
+#: error must be thrown"); Python's reader accepts larger ones, which are refused here.
+_INT64 = (-(2 ** 63), 2 ** 63 - 1)
 
 
 @dataclass
@@ -64,19 +78,22 @@ class Scene:
     units : unit of the scene file's lengths; ``unit_scale`` metres per unit
     triangles : all surfaces; ``materials[i]`` is the material of id i
     sky, sun : the daylight (``sun`` None when there is none)
-    options : quality options from ``[settings]`` (defaults otherwise)
+    options : quality options from ``[settings]`` over the ``high`` preset (:func:`~lbl_illum.options.scene_defaults`)
     warnings : things worth telling the user that are not errors
+    portals : (k, 3, 3) triangles [m] of the ``[[portals]]`` openings (invisible to rays;
+        sampled by the indirect calculation like portal glass)
     """
 
     triangles: Triangles
     materials: list[Material]
     sky: Sky
     sun: Sun | None = None
-    options: Options = field(default_factory=Options)
+    options: Options = field(default_factory=scene_defaults)
     units: str = "m"
     unit_scale: float = 1.0
     path: Path | None = None
     warnings: list[str] = field(default_factory=list)
+    portals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
 
     @property
     def material_table(self) -> MaterialTable:
@@ -107,9 +124,28 @@ def load_scene(path: str | Path) -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(_toml_error(name, exc)) from None
+    except RecursionError:          # thousands of nested arrays
+        raise InputError(f"{name}: values nested too deeply") from None
+    except ValueError:              # Python's limit on the digits of an integer (4300)
+        raise InputError(f"{name}: an integer is too long to read (TOML integers are 64-bit)") from None
+    _check_integers(data, name, "")
     scene = scene_from_dict(data, path.parent, name)
     scene.path = path
     return scene
+
+
+def _check_integers(value: Any, name: str, key: str) -> None:
+    """Refuse integers outside the 64-bit range of TOML, naming the key."""
+    stack = [(value, key)]
+    while stack:
+        item, path = stack.pop()
+        if isinstance(item, dict):
+            stack.extend((v, f"{path}.{k}" if path else str(k)) for k, v in item.items())
+        elif isinstance(item, list):
+            stack.extend((v, f"{path}[{i}]") for i, v in enumerate(item))
+        elif isinstance(item, int) and not isinstance(item, bool) and not _INT64[0] <= item <= _INT64[1]:
+            raise InputError(f"{name}: '{path}': integer of {item.bit_length()} bits is beyond TOML's "
+                             "64-bit range")
 
 
 def _toml_error(name: str, exc: Exception) -> str:
@@ -138,16 +174,43 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     _check_schema(data, where)
     units = data.get("units", "m")
     scale = metres_per_unit(units, f"{where}: 'units'")
-    materials = _materials(_table(data, "materials", where, "[materials]"), where)
+    material_warnings: list[str] = []
+    materials = _materials(_table(data, "materials", where, "[materials]"), where, material_warnings)
     sun, sky, warnings = daylight_from_dict(data, base_dir, where)
+    warnings = material_warnings + warnings
     options = _options(_table(data, "settings", where, "[settings]"), f"{where}: [settings]", scale)
     triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale,
                           {m.name: i for i, m in enumerate(materials)}, warnings)
     used = set(np.unique(triangles.material).tolist())
     warnings += [f"{where}: [materials.{m.name}] is not used by any geometry"
                  for i, m in enumerate(materials) if i not in used]
+    portals = _portals(data.get("portals"), where, scale)
     return Scene(triangles=triangles, materials=materials, sky=sky, sun=sun, options=options,
-                 units=units, unit_scale=scale, warnings=warnings)
+                 units=units, unit_scale=scale, warnings=warnings, portals=portals)
+
+
+def _portals(entries: Any, where: str, scale: float) -> np.ndarray:
+    """(k, 3, 3) triangles [m] of the ``[[portals]]`` polygons, each checked (at least
+    three vertices, planar, non-zero area, edges not crossing) and triangulated."""
+    if entries is None:
+        return np.zeros((0, 3, 3))
+    if not isinstance(entries, (list, tuple)):
+        raise InputError(f"{where}: 'portals' must be an array of tables ([[portals]]), got {show(entries)}")
+    out = []
+    for i, entry in enumerate(entries):
+        label = f"{where}: portals[{i}]"
+        if not isinstance(entry, Mapping):
+            raise InputError(f"{label}: must be a table with 'vertices', got {show(entry)}")
+        check_keys(entry, PORTAL_KEYS, label, required=("vertices",))
+        if "name" in entry and not isinstance(entry["name"], str):
+            raise InputError(f"{label}: 'name' must be a string, got {show(entry['name'])}")
+        value = entry["vertices"]
+        if not isinstance(value, (list, tuple)):
+            raise InputError(f"{label}: 'vertices' must be a list of [x, y, z] points, got {show(value)}")
+        points = np.array([get_vector({f"vertices[{j}]": p}, f"vertices[{j}]", label) for j, p in enumerate(value)],
+                          dtype=np.float64).reshape(-1, 3)
+        out.append(polygon_triangles(points * scale, f"{label} 'vertices'"))
+    return np.concatenate(out) if out else np.zeros((0, 3, 3))
 
 
 # ---------------------------------------------------------------------------
@@ -195,7 +258,7 @@ def daylight_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str
         position = (alt, az)
     if utc is not None:
         day = day_of_year(utc)
-    sky = sky_from_table(sky_table, sky_where, sun_position=position, day=day, extra_keys=("time",))
+    sky = _sky(sky_table, sky_where, position, day)
     if sun_table is not None:
         default = sky.direct_normal_illuminance if isinstance(sky, PerezSky) else None
         sun = sun_from_table(sun_table, sun_where, site, default_direct_normal=default, site_where="[site]")
@@ -219,6 +282,19 @@ def daylight_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str
     return sun, sky, warnings
 
 
+def _sky(table: Mapping[str, Any] | None, where: str, position, day) -> Sky:
+    """:func:`~lbl_illum.sky.sky_from_table`, with two guards: ``sky_type`` must be a finite
+    number before the sky reads it as a whole number, and a value so large that the sky
+    model overflows (a Perez sky of 1e308 lux) is refused, naming the table."""
+    if table is not None and isinstance(table.get("sky_type"), float) and not np.isfinite(table["sky_type"]):
+        raise InputError(f"{where}: 'sky_type' must be a whole number 1…15, got {table['sky_type']!r}")
+    try:
+        with np.errstate(over="raise"):
+            return sky_from_table(table, where, sun_position=position, day=day, extra_keys=("time",))
+    except (OverflowError, FloatingPointError):
+        raise InputError(f"{where}: a value is too large for the sky model (overflow)") from None
+
+
 def _sky_warnings(sky: Sky, where: str) -> list[str]:
     if isinstance(sky, CIEGeneralSky) and sky.sun_altitude is not None and sky.sun_altitude < 0.0 \
             and sky.sky_type not in (1, 3, 5):
@@ -238,17 +314,17 @@ def _weather_daylight(sky_table, sun_table, site_table, base_dir: Path, where: s
     kind = sky_table.get("type", "perez")
     if kind != "perez":
         raise InputError(f"{sky_where}: a 'weather' file gives a Perez sky: 'type' must be \"perez\" (or left out), "
-                         f"got {kind!r}")
+                         f"got {show(kind)}")
     if site_table is not None:
         raise InputError(f"{where}: [site] is not used with a weather file (the site is the file's LOCATION line)")
     if sun_table is not None:
         raise InputError(f"{where}: [sun] is not used with a weather file (the sun is the file's)")
     file = sky_table["weather"]
     if not isinstance(file, str) or not file:
-        raise InputError(f"{sky_where}: 'weather' must be a file name, got {file!r}")
+        raise InputError(f"{sky_where}: 'weather' must be a file name, got {show(file)}")
     values = sky_table.get("weather_values", "illuminance")
     if values not in WEATHER_VALUES:
-        raise InputError(f"{sky_where}: 'weather_values' must be one of {', '.join(WEATHER_VALUES)}, got {values!r}")
+        raise InputError(f"{sky_where}: 'weather_values' must be one of {', '.join(WEATHER_VALUES)}, got {show(values)}")
     rho = get_number(sky_table, "ground_reflectance", sky_where, default=0.2, minimum=0.0, maximum=1.0)
     epw = read_epw(base_dir / file, f"{where}: [sky] weather {file}")
     rec, local = epw.record_at(sky_table["time"], f"{sky_where} (weather {file})")
@@ -275,32 +351,49 @@ def _weather_daylight(sky_table, sun_table, site_table, base_dir: Path, where: s
 def _check_schema(data: Mapping[str, Any], where: str) -> None:
     schema = data.get("schema", SCHEMA)
     if isinstance(schema, bool) or schema != SCHEMA:
-        raise InputError(f"{where}: 'schema' {schema!r} is not supported (this version reads schema {SCHEMA})")
+        raise InputError(f"{where}: 'schema' {show(schema)} is not supported (this version reads schema {SCHEMA})")
 
 
 def _table(data: Mapping[str, Any], key: str, where: str, label: str) -> Mapping[str, Any] | None:
     """``data[key]`` when it is a table, None when absent; anything else is an error."""
     value = data.get(key)
     if value is not None and not isinstance(value, Mapping):
-        raise InputError(f"{where}: {label} must be a table, got {value!r}")
+        raise InputError(f"{where}: {label} must be a table, got {show(value)}")
     return value
 
 
-def _materials(table: Mapping[str, Any] | None, where: str) -> list[Material]:
-    """All ``[materials.NAME]`` tables in file order (index = material id)."""
+def _materials(table: Mapping[str, Any] | None, where: str, warnings: list[str]) -> list[Material]:
+    """All ``[materials.NAME]`` tables in file order (index = material id).
+
+    A reflectance of exactly 1 (diffuse or mirror) is accepted with a warning: such a
+    surface absorbs nothing, so the interreflections in a closed room form a series that
+    does not converge; every run stops it at a finite depth (``bounces`` diffuse levels,
+    at most :data:`MAX_BOUNCES`, and :data:`lbl_illum.integrator.MAX_SPECULAR_DEPTH` specular
+    interactions), so the result is finite but grows with ``bounces``.
+    """
     materials = []
     for name, entry in (table or {}).items():
         label = f"{where}: [materials.{name}]"
         if not isinstance(entry, Mapping):
-            raise InputError(f"{label} must be a table, got {entry!r}")
-        materials.append(material_from_table(name, entry, label))
+            raise InputError(f"{label} must be a table, got {show(entry)}")
+        material = material_from_table(name, entry, label)
+        if material.kind in ("diffuse", "mirror") and max(material.reflectance) >= 1.0:
+            warnings.append(f"{label}: reflectance 1 absorbs no light; interreflections are summed up to the "
+                            "bounce limit only, and the result grows with 'bounces'")
+        materials.append(material)
     return materials
 
 
 def _options(table: Mapping[str, Any] | None, where: str, scale: float) -> Options:
     """``[settings]``.  Spacings stay in scene units, as on the command line; the
-    integrator converts them with ``Scene.unit_scale``."""
-    return Options.from_table(table, where)
+    integrator converts them with ``Scene.unit_scale``.  ``bounces`` is at most
+    :data:`MAX_BOUNCES`."""
+    if table is not None and "preset" in table and not isinstance(table["preset"], str):
+        raise InputError(f"{where}: 'preset' must be a name (a string), got {show(table['preset'])}")
+    options = Options.from_table(table, where, base=scene_defaults())
+    if options.bounces > MAX_BOUNCES:
+        raise InputError(f"{where}: 'bounces' must be <= {MAX_BOUNCES}, got {options.bounces}")
+    return options
 
 
 # ---------------------------------------------------------------------------
@@ -323,12 +416,12 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, ids: dict[
     if entries is None:
         raise InputError(f"{where}: the scene has no geometry (add [[geometry]] entries)")
     if not isinstance(entries, (list, tuple)):
-        raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {entries!r}")
+        raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {show(entries)}")
     chunks, centers, radii = [], [], []
     for i, entry in enumerate(entries):
         label = f"{where}: geometry[{i}]"
         if not isinstance(entry, Mapping):
-            raise InputError(f"{label}: must be a table, got {entry!r}")
+            raise InputError(f"{label}: must be a table, got {show(entry)}")
         if "file" in entry and "shape" in entry:
             raise InputError(f"{label}: give either 'file' or 'shape', not both")
         if "file" in entry:
@@ -353,7 +446,7 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, ids: dict[
 def _material_id(name: Any, label: str, ids: dict[str, int]) -> int:
     """Id of a defined material; unknown names are an error with a suggestion."""
     if not isinstance(name, str):
-        raise InputError(f"{label}: a material must be given by its name (a string), got {name!r}")
+        raise InputError(f"{label}: a material must be given by its name (a string), got {show(name)}")
     if name not in ids:
         near = difflib.get_close_matches(name, list(ids), n=1)
         hint = f" (did you mean '{near[0]}'?)" if near else (
@@ -379,11 +472,11 @@ def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: flo
     check_keys(entry, FILE_KEYS, label)
     file = entry["file"]
     if not isinstance(file, str) or not file:
-        raise InputError(f"{label}: 'file' must be a file name, got {file!r}")
+        raise InputError(f"{label}: 'file' must be a file name, got {show(file)}")
     default = _material_id(entry["material"], label, ids) if "material" in entry else None
     mapping = entry.get("materials", {})
     if not isinstance(mapping, Mapping):
-        raise InputError(f"{label}: 'materials' must be a table of name = material, got {mapping!r}")
+        raise InputError(f"{label}: 'materials' must be a table of name = material, got {show(mapping)}")
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
     label = f"{label} {file}"
     parts = load_mesh_file(base_dir / file, label, scale)
@@ -414,7 +507,8 @@ def _check_mapping_used(mapped: dict[str, int], matched: set, parts: list, label
 
 
 def _assemble(chunks: list[_Chunk], warnings: list[str]) -> Triangles:
-    """Concatenate the chunks; refuse non-finite corners, drop zero-area and duplicate triangles.
+    """Concatenate the chunks; refuse non-finite corners and corners beyond
+    :data:`~lbl_illum.geometry.MAX_COORDINATE`, drop zero-area and duplicate triangles.
 
     Duplicates (same three corners in any order, also across entries) keep their
     first occurrence; each entry that lost triangles gets one warning.
@@ -424,6 +518,10 @@ def _assemble(chunks: list[_Chunk], warnings: list[str]) -> Triangles:
         if bad.any():
             raise InputError(f"{chunk.label}: {plural(int(bad.sum()), 'triangle')} with a NaN or "
                              "infinite vertex coordinate")
+        far = (np.abs(chunk.vertices) > MAX_COORDINATE).any(axis=(1, 2))
+        if far.any():
+            raise InputError(f"{chunk.label}: {plural(int(far.sum()), 'triangle')} with a vertex coordinate "
+                             f"beyond ±{MAX_COORDINATE:g} m (a wrong 'units' or exponent?)")
     if not chunks:
         return Triangles(np.zeros((0, 3, 3)), np.zeros(0, np.int32), np.zeros(0, np.int32))
     vertices = np.concatenate([c.vertices for c in chunks]).astype(np.float64)

@@ -47,6 +47,8 @@ def test_help_numbers_are_the_committed_measurements():
         assert row["options"]["accuracy"] == PRESETS[name]["accuracy"]
         assert row["options"]["samples"] == PRESETS[name]["samples"]
         assert row["options"]["bounces"] == PRESETS[name]["bounces"]
+        assert row["options"]["point_samples"] == PRESETS[name]["point_samples"]
+        assert row["options"]["interpolation"] == PRESETS[name]["interpolation"]
         assert seconds == pytest.approx(row["seconds"], abs=0.05)
         assert mean == pytest.approx(row["mean_error"], abs=5e-5)
         assert worst == pytest.approx(row["max_error"], abs=5e-5)

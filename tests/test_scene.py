@@ -128,7 +128,7 @@ def test_scene_from_dict_defaults():
     scene = scene_from_dict(minimal(), Path("."), "dict")
     assert isinstance(scene, Scene) and scene.path is None
     assert len(scene.triangles) == 2 and scene.triangles.areas.sum() == pytest.approx(2.0)
-    assert isinstance(scene.sky, NoSky) and scene.sun is None and scene.options == Options()
+    assert isinstance(scene.sky, NoSky) and scene.sun is None and scene.options == Options().with_preset("high")
     assert np.allclose(scene.triangles.normals, [0, 0, 1])
     assert scene.triangles.sphere_center.shape == (0, 3) and scene.triangles.sphere_radius.shape == (0,)
 

@@ -446,7 +446,8 @@ def scene_toml(files: dict[str, int], detail: Detail, total: int, command: str) 
         lines += [f"# {comment}", f"[materials.{name}]", f'type = "{"glass" if key == "transmittance" else "diffuse"}"',
                   f"{key} = {value}"]
         if key == "transmittance":
-            lines.append("portal = true")
+            # the same transmittance at every angle, as the committed reference was computed
+            lines += ['model = "constant"', "portal = true"]
         lines.append("")
     lines += ["# CIE overcast sky, 10 000 lux on an unobstructed horizontal surface outside (as examples/office).",
               "[sky]", 'type = "cie-overcast"', "horizontal_illuminance = 10000", "ground_reflectance = 0.2", ""]

@@ -200,25 +200,30 @@ def engine_label(options: dict) -> str:
     return text + f", {options['bounces']} bounces"
 
 
-#: Our ladders per kind of scene: presets; (accuracy, samples); (accuracy, samples,
-#: point samples); (accuracy, samples) with the paper's interpolation; pure Monte Carlo
-#: samples.  The furnished office's is shorter: each run there costs about ten office runs.
+#: Our ladders per kind of scene: presets; (accuracy, samples) with the cache from the
+#: points (gradients, the paper's method); (accuracy, samples, point samples) with
+#: gradients; the same with the Hessian's record domains; (accuracy, samples) with the
+#: paper's interpolation; pure Monte Carlo samples.  The furnished office's is shorter:
+#: each run there costs about ten office runs.
 ENGINE_LADDERS = {
     "office": {"presets": ("draft", "low", "medium", "high"),
-               "grid": [(a, s) for a in (0.07, 0.1, 0.15, 0.2, 0.3) for s in (256, 1024)] + [(0.3, 64)],
-               "point_samples": [(0.14, 256, 4096), (0.15, 128, 1024), (0.1, 128, 1024)],
-               "paper": [(0.1, 256), (0.2, 256)],
+               "grid": [(0.1, 256), (0.15, 256), (0.2, 256), (0.1, 1024), (0.3, 64)],
+               "point_samples": [(0.14, 256, 1024), (0.15, 128, 1024)],
+               "hessian": [(0.15, 64, 512), (0.12, 128, 1024), (0.08, 128, 2048), (0.05, 256, 4096)],
+               "paper": [(0.1, 256)],
                "pure": (1024, 4096, 16384)},
-    # (1 M triangles: "high" and a = 0.1 need more than the 6 GiB a run may take)
+    # (1 M triangles: a = 0.1 with the cache from the points needs more than the 6 GiB a run may take)
     "furnished": {"presets": ("draft", "low", "medium"),
-                  "grid": [(0.3, 64), (0.3, 256), (0.2, 256)],
-                  "point_samples": [(0.3, 64, 1024)], "paper": [], "pure": (1024, 4096)},
+                  "grid": [(0.3, 64), (0.2, 256)],
+                  "point_samples": [(0.3, 64, 1024)], "hessian": [(0.15, 64, 512)], "paper": [],
+                  "pure": (1024, 4096)},
     "sphere-plane": {"presets": ("draft", "low", "medium", "high"),
                      "grid": [(a, s) for a in (0.05, 0.1, 0.2, 0.3) for s in (256, 1024)],
-                     "point_samples": [], "paper": [(0.1, 1024), (0.2, 1024)], "pure": (256, 1024, 4096)},
+                     "point_samples": [], "hessian": [(0.1, 256, 0)], "paper": [(0.1, 1024), (0.2, 1024)],
+                     "pure": (256, 1024, 4096)},
 }
-QUICK_ENGINE_LADDER = {"presets": ("draft", "medium"), "grid": [(0.3, 64)], "point_samples": [], "paper": [],
-                       "pure": ()}
+QUICK_ENGINE_LADDER = {"presets": ("draft", "medium"), "grid": [(0.3, 64)], "point_samples": [], "hessian": [],
+                       "paper": [], "pure": ()}
 
 
 def engine_ladder(kind: str, quick: bool = False) -> list[Setting]:
@@ -243,6 +248,9 @@ def engine_ladder(kind: str, quick: bool = False) -> list[Setting]:
     for a, s, ps in ladder["point_samples"]:
         options = engine_options(accuracy=a, samples=s, point_samples=ps, **bounces)
         add("point samples", engine_label(options), options)
+    for a, s, ps in ladder["hessian"]:
+        options = engine_options(accuracy=a, samples=s, point_samples=ps, interpolation="hessian", **bounces)
+        add("Hessian", engine_label(options), options)
     for a, s in ladder["paper"]:
         options = engine_options(accuracy=a, samples=s, point_samples=0, interpolation="paper", **bounces)
         add("paper interpolation", engine_label(options), options)

@@ -27,6 +27,8 @@ STUDIES = {
     "office-tradeoff": "office_tradeoff",
     "extremes": "extremes",
     "scene-requires": "scene_requires",
+    "figure5": "figure5",
+    "deep-room": "deep_room",
 }
 
 

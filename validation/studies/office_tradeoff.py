@@ -28,12 +28,18 @@ from .report import Report, StudyContext, error_summary, fmt, new_figure, pct
 
 TITLE = "The speed–accuracy trade on the office example, and the presets"
 
-# (group, label, options); the full grid
+# (group, label, options); the full grid.  "cache": the paper's method with gradients
+# (Options() defaults); "point samples": sensors alone, the cache from the first reflection
+# with gradients; "Hessian": sensors alone, the cache with the Hessian's elliptical domains
 _CACHE = [("cache", f"a {a:g}, {s} samples", {"accuracy": a, "samples": s})
           for s in (256, 1024) for a in (0.07, 0.1, 0.15, 0.2, 0.3)]
 _POINT = [("point samples", f"point samples {p}, a {a:g}, 256 samples",
            {"point_samples": p, "accuracy": a, "samples": 256})
           for p in (1024, 4096) for a in (0.14, 0.2)]
+_HESSIAN = [("Hessian", f"Hessian, point samples {p}, a {a:g}, {s} samples",
+             {"point_samples": p, "accuracy": a, "samples": s, "interpolation": "hessian"})
+            for p, s, a in ((512, 64, 0.15), (512, 64, 0.12), (1024, 128, 0.15), (1024, 128, 0.12),
+                            (1024, 128, 0.1), (2048, 128, 0.08), (4096, 128, 0.07), (4096, 256, 0.05))]
 _MC = [("pure Monte Carlo", f"accuracy 0, {s} samples", {"accuracy": 0.0, "samples": s})
        for s in (1024, 4096, 16384)]
 _BOUNCES = [("bounces", f"{b} bounces (a 0.1, 256 samples)", {"bounces": b, "samples": 256})
@@ -82,7 +88,7 @@ def run(ctx: StudyContext) -> Report:
     scene, points, normals, ref_doc = _office()
     ref = np.asarray(ref_doc["illuminance"])
     rse = ref_doc["relative_standard_error"]
-    grid = _QUICK if ctx.quick else _CACHE + _POINT + _MC + _BOUNCES
+    grid = _QUICK if ctx.quick else _CACHE + _POINT + _HESSIAN + _MC + _BOUNCES
     presets = [] if ctx.quick else [("preset", name, dict(p)) for name, p in PRESETS.items()]
     ctx.plan(1 + len(grid) + len(presets))
     compute_illuminance(scene, points[:4], normals[:4], Options(samples=16, bounces=1))   # compile kernels
@@ -121,7 +127,8 @@ over the sensors: differences below that are not resolved.  Remake it with
 
     rep.heading("Seconds against error")
     fig, axes = new_figure(11, 4.2, ncols=2)
-    colours = {"cache": "C0", "point samples": "C1", "pure Monte Carlo": "C2", "bounces": "C4", "preset": "C3"}
+    colours = {"cache": "C0", "point samples": "C1", "Hessian": "C5", "pure Monte Carlo": "C2", "bounces": "C4",
+               "preset": "C3"}
     for ax, key, name in ((axes[0], "mean_error", "mean"), (axes[1], "max_error", "max")):
         for group, colour in colours.items():
             sel = [r for r in everything if r["group"] == group]
@@ -149,10 +156,11 @@ over the sensors: differences below that are not resolved.  Remake it with
         return [r["label"], f"{r['seconds']:.2f}", r["rays"], " ".join(str(c) for c in r["records"]),
                 pct(r["mean_error"]), pct(r["max_error"]), pct(r["bias"])]
 
-    for group in ("cache", "point samples", "pure Monte Carlo", "bounces"):
+    for group in ("cache", "point samples", "Hessian", "pure Monte Carlo", "bounces"):
         sel = [r for r in rows if r["group"] == group]
         if sel:
-            rep.heading({"cache": "The cache (a and samples)", "point samples": "Point samples",
+            rep.heading({"cache": "The cache (a and samples; gradients)", "point samples": "Point samples (gradients)",
+                         "Hessian": "Point samples, Hessian record domains",
                          "pure Monte Carlo": "Pure Monte Carlo", "bounces": "The bounce limit"}[group], 3)
             rep.table(header, [line(r) for r in sel])
     rep.heading("Pareto front", 3)
@@ -163,16 +171,18 @@ over the sensors: differences below that are not resolved.  Remake it with
         by_label = {r["label"]: r for r in rows}
         b6, b8 = (by_label.get(f"{b} bounces (a 0.1, 256 samples)", {}).get("bias") for b in (6, 8))
         rep.text(f"""
-`--preset NAME` sets accuracy, samples, bounces and point samples together; options given explicitly win
-over it.  The presets are points of the front above, with the bounce limit at 8 (the bounce ladder's bias is
-{pct(b6)} at 6 bounces and {pct(b8)} at 8 against the 12-bounce reference): *draft*
-and *low* are the cache alone at a = 0.2 and 0.15 with 256 samples; *medium* gives every sensor its own
-1024-sample evaluation and caches from the first reflection at a = 0.14 (on sparse grids the first level
-gains little from interpolation); *high* is the default settings.  What each measured here:""")
-        rep.table(["preset", "accuracy / samples / bounces / point samples", "s", "rays", "mean err", "max err",
-                   "bias"],
+`--preset NAME` sets accuracy, samples, bounces, point samples and interpolation together; options given
+explicitly win over it.  The presets are points of the front above, with the bounce limit at 8 (the bounce
+ladder's bias is {pct(b6)} at 6 bounces and {pct(b8)} at 8 against the 12-bounce reference).  Every one gives
+each sensor its own evaluation (on sparse grids the first level gains little from interpolation) and caches
+the reflections with the Hessian's elliptical record domains, the rule that measured fastest at equal error
+(docs/performance/interpolation/report.md); *high* is what a scene without settings runs.  What each measured
+here:""")
+        rep.table(["preset", "accuracy / samples / bounces / point samples / interpolation", "s", "rays", "mean err",
+                   "max err", "bias"],
                   [[r["label"], f"{r['options']['accuracy']:g} / {r['options']['samples']} / "
-                    f"{r['options']['bounces']} / {r['options']['point_samples'] or '—'}", f"{r['seconds']:.2f}",
+                    f"{r['options']['bounces']} / {r['options']['point_samples'] or '—'} / "
+                    f"{r['options']['interpolation']}", f"{r['seconds']:.2f}",
                     r["rays"], pct(r["mean_error"]), pct(r["max_error"]), pct(r["bias"])] for r in preset_rows])
     rep.heading("Findings")
     rep.bullets(_findings(rows, preset_rows, ref_doc))

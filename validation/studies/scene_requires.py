@@ -69,7 +69,7 @@ ON_PLANE = 1e-6
 #: the sun of the "sun without sky" case: due south, through the window
 SUN = {"altitude": 35.0, "azimuth": 180.0, "direct_normal_illuminance": 60000.0}
 #: The example's glazing without surface reflection.
-CLEAR_PORTAL = {"type": "glass", "transmittance": 0.6, "reflectance": 0.0, "portal": True}
+CLEAR_PORTAL = {"type": "glass", "model": "constant", "transmittance": 0.6, "reflectance": 0.0, "portal": True}
 
 QUICK = {"accuracy": 0.2, "bounces": 2, "samples": 64}
 FULL = {"accuracy": 0.1, "bounces": 3, "samples": 512}
