@@ -89,6 +89,7 @@ from .integrator import MAX_SPECULAR_DEPTH, Integrator
 from .materials import DIFFUSE, GLASS, LIGHT, MIRROR
 from .options import Options
 from .photometry import luminance
+from .progress import ProgressBar as _Bar
 from .scene import Scene
 from .views import View, view_from_file, view_from_string, views_from_table
 
@@ -547,24 +548,6 @@ def _options_from_args(scene: Scene, args) -> Options:
     return image_options(options)
 
 
-class _Bar:
-    """tqdm bar on standard error counting rays (shown after 1 s, only on a terminal)."""
-
-    def __init__(self, enabled: bool):
-        from tqdm import tqdm
-
-        self.bar = tqdm(total=None, unit="ray", unit_scale=True, delay=1.0, file=sys.stderr,
-                        disable=None if enabled else True, leave=False, dynamic_ncols=True)
-
-    def update(self, rays: int) -> None:
-        if rays:
-            self.bar.update(rays)
-
-    def describe(self, text: str) -> None:
-        self.bar.set_description_str(text, refresh=False)
-
-    def close(self) -> None:
-        self.bar.close()
 
 
 def _check_outputs(args) -> None:
