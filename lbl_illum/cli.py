@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import textwrap
 import time
@@ -17,7 +18,9 @@ from pathlib import Path
 
 from . import __version__
 from .errors import InputError
+from .progress import ProgressBar
 from .options import INTERPOLATIONS, PRESETS, Options, preset_table
+from .scene import MAX_BOUNCES
 
 __all__ = ["main"]
 
@@ -29,40 +32,43 @@ quality options (also settable under [settings] in the scene file; the command l
 """
 
 
-class _ProgressBar:
-    """Adapter from the integrator's progress calls to a tqdm bar on standard error
-    (shown after one second, and only on a terminal)."""
-
-    def __init__(self, enabled: bool):
-        from tqdm import tqdm
-
-        self.bar = tqdm(total=None, unit="ray", unit_scale=True, delay=1.0, file=sys.stderr,
-                        disable=None if enabled else True, leave=False, dynamic_ncols=True)
-
-    def update(self, rays: int) -> None:
-        if rays:
-            self.bar.update(rays)
-
-    def describe(self, text: str) -> None:
-        self.bar.set_description_str(text, refresh=False)
-
-    def close(self) -> None:
-        self.bar.close()
+_ProgressBar = ProgressBar
 
 
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    return value
+def _whole(minimum: int = 0, maximum: int | None = None):
+    """An argparse type: a whole number within [minimum, maximum]."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"must be <= {maximum}, got {value}")
+        return value
+    return parse
 
 
-def _number(text):
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+def _finite(minimum: float | None = None, maximum: float | None = None, above: bool = False):
+    """An argparse type: a finite number, at least ``minimum`` (greater with ``above``) and
+    at most ``maximum``."""
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+        if minimum is not None and (value < minimum or (above and value == minimum)):
+            raise argparse.ArgumentTypeError(f"must be {'>' if above else '>='} {minimum:g}, got {value:g}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"must be <= {maximum:g}, got {value:g}")
+        return value
+    return parse
+
+
+_number = _finite()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -96,22 +102,24 @@ def _add_quality_options(p) -> None:
     q = p.add_argument_group("quality")
     q.add_argument("--preset", choices=tuple(PRESETS), metavar="NAME",
                    help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it)")
-    q.add_argument("--accuracy", type=_number, metavar="A",
+    q.add_argument("--accuracy", type=_finite(0.0), metavar="A",
                    help=f"the paper's a (default {d.accuracy:g}; 0 = no interpolation)")
-    q.add_argument("--bounces", type=_positive_int, metavar="N",
+    q.add_argument("--bounces", type=_whole(0, MAX_BOUNCES), metavar="N",
                    help=f"diffuse reflections followed (default {d.bounces})")
-    q.add_argument("--samples", type=_positive_int, metavar="N",
+    q.add_argument("--samples", type=_whole(1), metavar="N",
                    help=f"hemisphere samples of a first-level primary evaluation of the cache (default {d.samples})")
-    q.add_argument("--point-samples", type=_positive_int, metavar="N",
+    q.add_argument("--point-samples", type=_whole(0), metavar="N",
                    help="evaluate every point on its own with N hemisphere samples; the cache starts at the "
                         f"first reflection (default {d.point_samples or 'off'}; 0 = off)")
-    q.add_argument("--ambient", type=_number, metavar="E",
+    q.add_argument("--ambient", type=_finite(0.0), metavar="E",
                    help=f"illuminance [lux] at the bounce limit (default {d.ambient:g})")
-    q.add_argument("--min-spacing", type=_number, metavar="D", help="lower clamp on record R_i [scene units]")
-    q.add_argument("--max-spacing", type=_number, metavar="D", help="upper clamp on record R_i [scene units]")
+    q.add_argument("--min-spacing", type=_finite(0.0, above=True), metavar="D",
+                   help="lower clamp on record R_i [scene units]")
+    q.add_argument("--max-spacing", type=_finite(0.0, above=True), metavar="D",
+                   help="upper clamp on record R_i [scene units]")
     q.add_argument("--no-bounce-scaling", action="store_true",
                    help="keep a and samples the same at every level (§3.4 scaling off)")
-    q.add_argument("--seed", type=_positive_int, metavar="S", help=f"random seed (default {d.seed})")
+    q.add_argument("--seed", type=_whole(0), metavar="S", help=f"random seed (default {d.seed})")
     q.add_argument("--interpolation", choices=INTERPOLATIONS,
                    help="paper: Eq. 5 as published; gradients: over values extrapolated by each record's "
                         "irradiance gradients (Ward & Heckbert 1992); hessian: that with elliptical record "
@@ -171,9 +179,9 @@ def _build_parser() -> argparse.ArgumentParser:
     d.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts, optional area name column)")
     d.add_argument("-o", "--output", required=True, metavar="OUT",
                    help=".csv (x,y,z,nx,ny,nz,daylight_factor,illuminance,direct,indirect) or .txt (DF per line)")
-    d.add_argument("--sky-illuminance", type=_number, default=10000.0, metavar="E",
+    d.add_argument("--sky-illuminance", type=_finite(0.0, above=True), default=10000.0, metavar="E",
                    help="horizontal illuminance of the overcast sky [lux] (default 10000; DF does not depend on it)")
-    d.add_argument("--ground-reflectance", type=_number, metavar="R",
+    d.add_argument("--ground-reflectance", type=_finite(0.0, 1.0), metavar="R",
                    help="reflectance of the ground below the horizon (default: the scene's [sky] value, else 0.2)")
     _add_quality_options(d)
     _add_file_options(d)
@@ -190,8 +198,9 @@ def _build_parser() -> argparse.ArgumentParser:
     g.add_argument("scene", help="scene file (.toml)")
     g.add_argument("-o", "--output", required=True, metavar="PTS", help="sensor points to write (.pts)")
     g.add_argument("--height", type=_number, metavar="H", help="height above the surface (default 0.8 m)")
-    g.add_argument("--spacing", type=_number, metavar="S", help="largest spacing (default: EN 12464-1 rule)")
-    g.add_argument("--margin", type=_number, metavar="M", help="band along edges and walls without points "
+    g.add_argument("--spacing", type=_finite(0.0, above=True), metavar="S",
+                   help="largest spacing (default: EN 12464-1 rule)")
+    g.add_argument("--margin", type=_finite(0.0), metavar="M", help="band along edges and walls without points "
                    "(default 0.5 m)")
     g.add_argument("--surface", action="append", metavar="MATERIAL", help="lay the grid on this material's "
                    "horizontal triangles, as an area of that name (repeat for several areas)")
@@ -201,13 +210,20 @@ def _build_parser() -> argparse.ArgumentParser:
     g.add_argument("--plot", metavar="PLAN", help="plan of the points and the room (.png, .pdf or .svg)")
     g.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
-    w = sub.add_parser("view", help="3-D view of a scene and its results",
-                       description="Show the scene in 3-D (pyvista) with sensor points coloured by result: in a "
-                       "window, or off screen into a PNG file with --screenshot.  Ceilings above the points are "
-                       "left out and the surfaces drawn semi-transparent.")
+    w = sub.add_parser("view", help="3-D view of a scene, its results and its cache records",
+                       description="Show the scene in 3-D (pyvista) with sensor points coloured by result and "
+                       "the records of an irradiance cache file drawn as discs of radius a x R_i (their valid "
+                       "domains; ellipses for elliptical domains), coloured by level, as the paper's Figure 5b: "
+                       "in a window, or off screen into a PNG file with --screenshot.  Ceilings above the points "
+                       "(or, without points, above mid-height) are left out with the records on them, and the "
+                       "surfaces drawn semi-transparent.")
     w.add_argument("scene", help="scene file (.toml)")
     w.add_argument("--results", metavar="FILE", help="results .csv of illuminance or daylight-factor (coloured "
                    "by daylight_factor, else illuminance) or a .pts file (points only)")
+    w.add_argument("--cache", metavar="FILE", help="draw the records of this cache file (any lbl_illum cache "
+                   "file: it need not match the scene's settings)")
+    w.add_argument("--levels", metavar="K[,K...]", help="with --cache: draw only these diffuse levels "
+                   "(0 = the records at the points or pixels themselves; default all)")
     w.add_argument("--screenshot", metavar="PNG", help="write the view to this .png file instead of a window")
     w.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
@@ -291,6 +307,8 @@ def _check_run_files(args) -> None:
     for extra in (args.stats, args.cache):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
+        if extra and Path(extra).is_dir():
+            raise InputError(f"{extra}: is a folder; give a file name")
     if args.plot:
         check_plot_path(args.plot)
     if args.view3d:
@@ -304,11 +322,15 @@ def _check_run_files(args) -> None:
 def _run_options(scene, args):
     """The scene's [settings], then the preset, then the options given on the command line."""
     options = scene.options.with_preset(args.preset) if args.preset else scene.options
-    return options.replace(
-        accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
-        min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
-        interpolation=args.interpolation, point_samples=args.point_samples,
-        bounce_scaling=False if args.no_bounce_scaling else None)
+    try:
+        return options.replace(
+            accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
+            min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
+            interpolation=args.interpolation, point_samples=args.point_samples,
+            bounce_scaling=False if args.no_bounce_scaling else None)
+    except InputError as exc:   # each value passed its own check: a combination (min > max spacing)
+        where = f"the command line with {Path(args.scene).name} [settings]:"
+        raise InputError(str(exc).replace("options:", where, 1)) from None
 
 
 def _compute(scene, args, points, normals):
@@ -539,14 +561,25 @@ def _dropped(counts: dict) -> str:
 
 def _run_view(args) -> int:
     t0 = time.perf_counter()
+    from . import view3d
     from .scene import load_scene
     from .sensors import read_results
-    from .view3d import check_view_path, require_pyvista
 
-    require_pyvista()
+    view3d.require_pyvista()
     if args.screenshot:
-        check_view_path(args.screenshot)
+        view3d.check_view_path(args.screenshot)
+    levels = None
+    if args.levels is not None:
+        if not args.cache:
+            raise InputError("--levels: give the cache file with --cache FILE")
+        try:
+            levels = sorted({int(k) for k in args.levels.split(",") if k.strip()})
+        except ValueError:
+            raise InputError(f"--levels {args.levels}: give level numbers separated by commas, e.g. 0,1") from None
+        if not levels or levels[0] < 0:
+            raise InputError(f"--levels {args.levels}: give level numbers 0, 1, 2 ... separated by commas")
     scene = load_scene(args.scene)
+    records = view3d.read_cache_layer(args.cache, levels) if args.cache else None
     points = values = areas = None
     label = "points"
     if args.results:
@@ -555,10 +588,25 @@ def _run_view(args) -> int:
             if key in columns:
                 values, label = columns[key], name
                 break
-    _view3d(scene, points, values, areas, label, args.screenshot, title=Path(args.scene).name)
+    layers = [view3d.GeometryLayer(scene)]
+    if points is not None:
+        layers.append(view3d.PointLayer(points, values, label=label, areas=areas))
+    if records is not None:
+        layers.append(records)
+    try:
+        view3d.render(scene, layers, points=points, screenshot=args.screenshot, title=Path(args.scene).name)
+    except InputError:
+        raise
+    except Exception as exc:  # VTK reports a missing OpenGL as anything from RuntimeError up
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise RunError(f"{args.screenshot or 'window'}: the 3-D view failed ({reason})") from None
     if not args.quiet and args.screenshot:
-        what = f"{len(points)} points" if points is not None else "the scene"
-        print(f"lbl-illum: view: {what} in {time.perf_counter() - t0:.2f} s -> {args.screenshot}", file=sys.stderr)
+        what = [f"{len(points)} points"] if points is not None else []
+        if records is not None:
+            what.append(f"{sum(records.drawn.values()):,} of {sum(len(lv['R']) for lv in records.levels):,} "
+                        "records")
+        print(f"lbl-illum: view: {', '.join(what) or 'the scene'} in {time.perf_counter() - t0:.2f} s "
+              f"-> {args.screenshot}", file=sys.stderr)
     return 0
 
 
@@ -644,6 +692,11 @@ def _run_validate(args) -> int:
     return 0
 
 
+def _one_line(exc: BaseException) -> str:
+    """An error message as one line (line breaks of a message quoted from elsewhere become spaces)."""
+    return " ".join(str(exc).split("\n")).replace("\r", " ")
+
+
 def main(argv=None) -> int:
     parser = _build_parser()
     try:
@@ -671,10 +724,10 @@ def main(argv=None) -> int:
             return run_cache_command(args)
         raise InputError(f"lbl-illum: unknown command {args.command!r}")
     except InputError as exc:
-        print(f"lbl-illum: error: {exc}", file=sys.stderr)
+        print(f"lbl-illum: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except RunError as exc:
-        print(f"lbl-illum: error: {exc}", file=sys.stderr)
+        print(f"lbl-illum: error: {_one_line(exc)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:
         kept = ""

@@ -17,7 +17,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import InputError, check_keys, get_number, get_vector, plural, show
+from .errors import InputError, check_keys, get_number, get_vector, show
 
 __all__ = [
     "Triangles", "MeshPart", "Shape", "SHAPE_KEYS", "SPHERE_SUBDIVISIONS", "SPHERE_MAX_DEVIATION",

@@ -75,6 +75,10 @@ BOUNCE_SAMPLE_FACTOR = 0.5
 #: Interpolation rules: the paper's Eq. 5, Eq. 5 over gradient-extrapolated values, and that
 #: with Hessian-sized elliptical domains.
 INTERPOLATIONS = ("paper", "gradients", "hessian")
+#: Most diffuse bounces a scene's ``[settings]``, the command line or ``Options`` may ask
+#: for.  The engine keeps bounces + 1 levels of records and a cache file holds at most
+#: 1024; the integrating-sphere study converges ρ = 0.9 within 0.5 % in 46 bounces.
+MAX_BOUNCES = 1000
 #: Floor on the samples of a deeper-level primary evaluation (never above the first level's).
 MIN_DEEP_SAMPLES = 16
 
@@ -171,6 +175,8 @@ class Options:
             bad("samples", f"must be >= 1, got {self.samples}")
         if self.bounces < 0:
             bad("bounces", f"must be >= 0, got {self.bounces}")
+        if self.bounces > MAX_BOUNCES:
+            bad("bounces", f"must be <= {MAX_BOUNCES}, got {self.bounces}")
         if self.seed < 0:
             bad("seed", f"must be >= 0, got {self.seed}")
         for key in ("min_spacing", "max_spacing"):
@@ -211,7 +217,7 @@ class Options:
 
     def with_preset(self, name: Any, where: str = "options") -> "Options":
         """A copy with the quality options of preset ``name`` (see :data:`PRESETS`)."""
-        if name not in PRESETS:
+        if not isinstance(name, str) or name not in PRESETS:
             raise InputError(f"{where}: 'preset' must be one of {', '.join(PRESETS)}, got {name!r}")
         return dataclasses.replace(self, **PRESETS[name])
 

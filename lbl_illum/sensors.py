@@ -7,6 +7,10 @@ the area the point belongs to (``lbl-illum grid`` writes it); a name is one word
 without ``#``, ``,`` or ``"`` that does not read as a number.  Lines without a name
 belong to the unnamed area ``""``.  (Radiance's ``rtrace`` reads numbers only: give it
 the points through ``lbl-illum export radiance --points``, which writes six columns.)
+Numbers are decimal, as C's ``atof`` reads them; lines end at line feeds (CR LF and CR
+too) and are numbered so in messages.  A point is refused, naming its line, when a value
+is not finite, a coordinate is beyond ±:data:`~lbl_illum.geometry.MAX_COORDINATE` metres,
+or the normal is shorter than :data:`MIN_NORMAL`.
 
 Results are written to a temporary file in the output's folder and renamed into
 place, so a failed run never leaves a partial output file:
@@ -24,29 +28,63 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, show
 from .files import atomic_write_text
+from .geometry import MAX_COORDINATE
 
 __all__ = ["read_points", "write_points", "write_results", "read_results", "check_output_path", "check_area_name",
            "RESULT_FORMATS"]
 
 RESULT_FORMATS = (".csv", ".txt")
+#: A decimal number as a ``.pts`` file may write it: sign, digits, point, exponent; or
+#: inf / nan (refused as not finite, with their own message).
+_NUMBER = re.compile(r"[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|inf|infinity|nan)", re.IGNORECASE)
+#: Normals whose length is at most this are refused as zero-length.
+MIN_NORMAL = 1e-12
 
 
 def check_area_name(name: str, where: str) -> str:
     """Refuse an area name that cannot stand as the seventh field of a ``.pts`` line
-    (or in a CSV cell unquoted): empty, white space, ``#``, ``,``, ``"``, or a number."""
-    if not name or any(c.isspace() for c in name) or any(c in name for c in '#,"'):
-        raise InputError(f"{where}: area name {name!r} must be one word without '#', ',' or '\"'")
+    (or in a CSV cell unquoted): empty, white space, control characters, ``#``, ``,``,
+    ``"``, or a number."""
+    if not name or any(c.isspace() or not c.isprintable() for c in name) or any(c in name for c in '#,"'):
+        raise InputError(f"{where}: area name {show(name)} must be one word without '#', ',' or '\"'")
     try:
         float(name)
     except ValueError:
         return name
-    raise InputError(f"{where}: area name {name!r} looks like a number")
+    raise InputError(f"{where}: area name {show(name)} looks like a number")
+
+
+def _read_text(path: Path, what: str = "") -> str:
+    """The UTF-8 text of a file; a missing, unreadable or non-UTF-8 file is an
+    :class:`InputError` naming it (and the line of the first bad byte)."""
+    name = path.name or str(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{name}: is a folder, not a{what} file") from None
+    except OSError as exc:
+        raise InputError(f"{name}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise InputError(f"{name}: line {line}: not UTF-8 text (byte {exc.start})") from None
+
+
+def _lines(text: str):
+    """(line number, line) pairs, lines split at LF (CR LF and CR-only endings are read
+    too), numbered as editors number them; unlike ``str.splitlines`` the separators
+    U+001C…U+001E, U+0085 and U+2028 do not start a line."""
+    return enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), start=1)
 
 
 def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas: bool = False):
@@ -57,15 +95,10 @@ def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas:
     str, ``""`` on lines without a name).
     """
     path = Path(path)
-    name = path.name
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read ({exc.__class__.__name__})") from None
+    name = path.name or str(path)
+    text = _read_text(path, " points")
     rows, areas = [], []
-    for number, line in enumerate(text.splitlines(), start=1):
+    for number, line in _lines(text):
         body = line.split("#", 1)[0].strip()
         if not body:
             continue
@@ -73,23 +106,40 @@ def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas:
         if len(fields) not in (6, 7):
             raise InputError(f"{name}: line {number}: expected 6 numbers 'x y z nx ny nz' and an optional "
                              f"area name, got {len(fields)} fields")
-        try:
-            values = [float(f) for f in fields[:6]]
-        except ValueError:
-            raise InputError(f"{name}: line {number}: not a number in {body!r}") from None
+        values = [_number(f) for f in fields[:6]]
+        if None in values:
+            bad = fields[values.index(None)]
+            raise InputError(f"{name}: line {number}: not a number: {show(bad, 30)}")
         if not all(math.isfinite(v) for v in values):
             raise InputError(f"{name}: line {number}: values must be finite")
-        if math.sqrt(sum(v * v for v in values[3:])) <= 1e-12:
+        if max(abs(v) for v in values[:3]) * unit_scale > MAX_COORDINATE:
+            raise InputError(f"{name}: line {number}: a coordinate is beyond ±{MAX_COORDINATE:g} m")
+        if _norm(values[3:]) <= MIN_NORMAL:
             raise InputError(f"{name}: line {number}: zero-length normal")
         areas.append(check_area_name(fields[6], f"{name}: line {number}") if len(fields) == 7 else "")
         rows.append(values)
     if not rows:
         raise InputError(f"{name}: no points")
     data = np.array(rows, dtype=np.float64)
-    normals = data[:, 3:] / np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
+    n = data[:, 3:] / np.abs(data[:, 3:]).max(axis=1, keepdims=True)      # scaled first: no overflow
+    normals = n / np.linalg.norm(n, axis=1, keepdims=True)
     if with_areas:
         return data[:, :3] * unit_scale, normals, np.array(areas, dtype=object)
     return data[:, :3] * unit_scale, normals
+
+
+def _number(text: str) -> float | None:
+    """A decimal number of a ``.pts`` field (as C's ``atof`` reads it, without hex, digit
+    grouping or Unicode digits, which Python's ``float`` would take); None otherwise."""
+    if not _NUMBER.fullmatch(text):
+        return None
+    return float(text)
+
+
+def _norm(v) -> float:
+    """Euclidean length of a short vector without overflow or underflow."""
+    top = max(abs(x) for x in v)
+    return 0.0 if top == 0.0 else top * math.sqrt(sum((x / top) ** 2 for x in v))
 
 
 def write_points(path: str | os.PathLike, points: np.ndarray, normals: np.ndarray,
@@ -111,12 +161,15 @@ def write_points(path: str | os.PathLike, points: np.ndarray, normals: np.ndarra
 
 
 def check_output_path(path: str | os.PathLike, formats=RESULT_FORMATS) -> Path:
-    """Refuse an output whose extension is unknown or whose folder does not exist."""
+    """Refuse an output whose extension is unknown, whose folder does not exist, or that
+    is a folder itself: found before any work, so bad input leaves no file behind."""
     path = Path(path)
     if path.suffix.lower() not in formats:
         raise InputError(f"{path.name}: output must end in {' or '.join(formats)}")
-    if path.parent and not path.parent.exists():
+    if not path.parent.is_dir():
         raise InputError(f"{path}: folder {path.parent} does not exist")
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder; give a file name")
     return path
 
 
@@ -165,29 +218,28 @@ def read_results(path: str | os.PathLike, unit_scale: float = 1.0):
     if path.suffix.lower() != ".csv":
         points, normals, areas = read_points(path, unit_scale, with_areas=True)
         return points, normals, {}, areas
-    try:
-        lines = [l for l in path.read_text().splitlines() if l.strip()]
-    except FileNotFoundError:
-        raise InputError(f"{path.name}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path.name}: cannot read ({exc.__class__.__name__})") from None
+    lines = [(n, l) for n, l in _lines(_read_text(path, " results")) if l.strip()]
     if not lines:
         raise InputError(f"{path.name}: empty file")
-    header = [h.strip() for h in lines[0].split(",")]
+    first, top = lines[0]
+    header = [h.strip() for h in top.split(",")]
     missing = [c for c in ("x", "y", "z", "nx", "ny", "nz") if c not in header]
     if missing:
-        raise InputError(f"{path.name}: line 1: no column {missing[0]!r} (expected a results file of lbl-illum)")
+        raise InputError(f"{path.name}: line {first}: no column {missing[0]!r} (expected a results file of "
+                         "lbl-illum)")
+    if len(set(header)) != len(header):
+        raise InputError(f"{path.name}: line {first}: a column name appears twice")
     numeric = [h for h in header if h != "area"]
     rows, areas = [], []
-    for number, line in enumerate(lines[1:], start=2):
+    for number, line in lines[1:]:
         fields = [f.strip() for f in line.split(",")]
         if len(fields) != len(header):
             raise InputError(f"{path.name}: line {number}: expected {len(header)} fields, got {len(fields)}")
         record = dict(zip(header, fields))
-        try:
-            rows.append([float(record[h]) for h in numeric])
-        except ValueError:
-            raise InputError(f"{path.name}: line {number}: not a number") from None
+        values = [_number(record[h]) for h in numeric]
+        if None in values:
+            raise InputError(f"{path.name}: line {number}: column {numeric[values.index(None)]!r}: not a number")
+        rows.append(values)
         areas.append(record.get("area", ""))
     if not rows:
         raise InputError(f"{path.name}: no points")
@@ -197,4 +249,6 @@ def read_results(path: str | os.PathLike, unit_scale: float = 1.0):
     col = {h: data[:, i] for i, h in enumerate(numeric)}
     points = np.column_stack([col.pop(c) for c in ("x", "y", "z")]) * unit_scale
     normals = np.column_stack([col.pop(c) for c in ("nx", "ny", "nz")])
+    if (np.abs(points) > MAX_COORDINATE).any():
+        raise InputError(f"{path.name}: a coordinate is beyond ±{MAX_COORDINATE:g} m")
     return points, normals, col, np.array(areas, dtype=object)

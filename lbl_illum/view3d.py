@@ -1,9 +1,21 @@
 """A 3-D view of a scene with its sensor points coloured by result (pyvista / VTK).
 
 The view is built from *layers*, each an object with ``add_to(plotter, view)``: the
-scene's geometry (:class:`GeometryLayer`) and the sensor points (:class:`PointLayer`).
-Further layers (e.g. irradiance-cache records drawn as spheres) only need the same
-method; :func:`render` takes any list of them.
+scene's geometry (:class:`GeometryLayer`), the sensor points (:class:`PointLayer`) and
+the records of an irradiance cache (:class:`CacheLayer`); :func:`render` takes any list
+of them.
+
+**Records** are drawn as the paper draws them in its Figure 5b (Ward, Rubinstein &
+Clear, "A Ray Tracing Solution for Diffuse Interreflection", SIGGRAPH 1988): each record
+i of level k is a flat disc at its position P_i [m], perpendicular to its normal N_i,
+whose radius is the reach of its valid domain, a_k · R_i [m].  A query at distance d
+from P_i (with the same normal) may use the record while d / R_i < a_k (Eq. 5 with
+the normal term 0), so the disc is the set of same-plane points the record serves.
+A level with elliptical domains (``interpolation = "hessian"``) holds a shape vector W_i
+per record: the domain is (d² + (d·W_i)²) / R_i² < a_k², an ellipse whose short radius
+a_k R_i / sqrt(1 + |W_i|²) lies along W_i and whose long radius a_k R_i lies across it
+(:attr:`lbl_illum.cache.LevelRecords.W`); it is drawn as that ellipse.  Discs are
+coloured by level, with a legend giving each level's ``a`` and record count.
 
 Geometry near the points is drawn semi-transparent, grey by reflectance, glass pale
 blue, light sources yellow; horizontal surfaces above the highest point (ceilings,
@@ -28,7 +40,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
@@ -37,7 +49,7 @@ import numpy as np
 from .errors import InputError
 from .files import atomic_write_bytes
 
-__all__ = ["GeometryLayer", "PointLayer", "ViewFrame", "render", "check_view_path", "offscreen_available",
+__all__ = ["GeometryLayer", "PointLayer", "CacheLayer", "ViewFrame", "record_outlines", "read_cache_layer", "render", "check_view_path", "offscreen_available",
            "require_pyvista", "SCREENSHOT_FORMATS"]
 
 SCREENSHOT_FORMATS = (".png",)
@@ -204,6 +216,152 @@ class PointLayer:
                 centres[:, 2] = np.asarray(self.points)[:, 2].max() + 0.3
                 plotter.add_point_labels(centres, labelled, font_size=14, point_size=1, shape_opacity=0.6,
                                          always_visible=True)
+
+
+#: Corners of the polygon drawn for each record's domain.
+RECORD_SIDES = 24
+#: Discs float this fraction of the region of interest's size above their surface,
+#: so that the surface does not hide them.
+RECORD_LIFT = 2e-3
+#: Opacity of the record discs (their outlines are drawn opaque).
+RECORD_OPACITY = 0.45
+
+
+def _tangent_frame(N: np.ndarray, W: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit normals n and two unit tangents (e1, e2) with e1 × e2 = n, each (n, 3).
+
+    Without W (or where W has no tangential part) e1 is any tangent; otherwise e1 is
+    the direction of W's tangential part (the short axis of an elliptical domain).
+    """
+    n = np.asarray(N, np.float64)
+    n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    helper = np.where((np.abs(n[:, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    e1 = np.cross(helper, n)
+    if W is not None:
+        w = np.asarray(W, np.float64)
+        w = w - np.einsum("ij,ij->i", w, n)[:, None] * n
+        shaped = np.linalg.norm(w, axis=1) > 1e-9
+        e1[shaped] = w[shaped]
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(n, e1)
+    return n, e1, e2
+
+
+def record_outlines(P, N, R, accuracy: float, W=None, sides: int = RECORD_SIDES, lift: float = 0.0) -> np.ndarray:
+    """Corners (n, sides, 3) [m] of the polygons that outline n records' valid domains.
+
+    P (n, 3) [m], N (n, 3) unit normals, R (n,) [m] the records' R_i, ``accuracy`` the
+    level's a; W (n, 3) the shape vectors of elliptical domains (None: round).  A round
+    domain is a circle of radius a R_i in the record's tangent plane; an elliptical one
+    has radius a R_i / sqrt(1 + |W_i|²) along W_i and a R_i across it.  ``lift`` [m]
+    moves the polygons along N.
+    """
+    P = np.asarray(P, np.float64).reshape(-1, 3)
+    R = np.asarray(R, np.float64).reshape(-1)
+    n, e1, e2 = _tangent_frame(N, W)
+    long = accuracy * R
+    short = long if W is None else long / np.sqrt(1.0 + np.sum(np.asarray(W, np.float64) ** 2, axis=1))
+    t = 2.0 * np.pi * np.arange(sides) / sides
+    c, s = np.cos(t), np.sin(t)
+    return ((P + lift * n)[:, None, :] + (short[:, None] * c)[:, :, None] * e1[:, None, :]
+            + (long[:, None] * s)[:, :, None] * e2[:, None, :])
+
+
+def _level_colours(k: int) -> tuple[float, float, float]:
+    from matplotlib import colormaps
+
+    return tuple(float(x) for x in colormaps["tab10"](k % 10)[:3])
+
+
+@dataclass
+class CacheLayer:
+    """The records of an irradiance cache, drawn as their valid domains (module text).
+
+    levels : one dict per diffuse level with ``accuracy`` (a), ``P`` (n, 3) [m], ``N``
+    (n, 3), ``R`` (n,) [m] and optionally ``W`` (n, 3) (elliptical domains);
+    show : the level numbers to draw (None: every level); the first level drawn is the
+    most opaque (``opacity``), the n-th drawn after it ``opacity / (1 + n/2)``.  After :meth:`add_to`,
+    ``drawn`` holds the records drawn per level (those inside the region of interest,
+    and not on a horizontal surface above the ceiling cut).
+    """
+
+    levels: list
+    show: list | None = None
+    opacity: float = RECORD_OPACITY
+    drawn: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_cache(cls, cache, show=None) -> "CacheLayer":
+        """From an :class:`~lbl_illum.cache.IrradianceCache` or a
+        :class:`~lbl_illum.cache.CacheData` (a file's contents)."""
+        levels = []
+        if hasattr(cache, "levels") and not hasattr(cache, "header"):
+            for lv in cache.levels:
+                n = lv.count
+                levels.append({"accuracy": lv.accuracy, "P": lv.P[:n], "N": lv.N[:n], "R": lv.R[:n],
+                               "W": lv.W[:n] if lv.anisotropic else None})
+        else:
+            for k, info in enumerate(cache.header["levels"]):
+                a = cache.level(k)
+                levels.append({"accuracy": float(info["accuracy"]), "P": a["P"], "N": a["N"], "R": a["R"],
+                               "W": a.get("W") if cache.anisotropic else None})
+        return cls(levels, show)
+
+    def add_to(self, plotter, frame: ViewFrame) -> None:
+        import pyvista as pv
+
+        size = float(np.max(frame.hi - frame.lo))
+        entries, shaped = [], False
+        for k, lv in enumerate(self.levels):
+            if self.show is not None and k not in self.show:
+                continue
+            P = np.asarray(lv["P"], np.float64).reshape(-1, 3)
+            N = np.asarray(lv["N"], np.float64).reshape(-1, 3)
+            keep = np.all((P >= frame.lo) & (P <= frame.hi), axis=1)
+            if frame.cut_above is not None:
+                keep &= ~((np.abs(N[:, 2]) > 0.99) & (P[:, 2] > frame.cut_above))
+            idx = np.flatnonzero(keep)
+            self.drawn[k] = int(len(idx))
+            if len(idx) == 0 or lv["accuracy"] <= 0.0:
+                continue
+            W = None if lv.get("W") is None else np.asarray(lv["W"])[idx]
+            corners = record_outlines(P[idx], N[idx], np.asarray(lv["R"])[idx], lv["accuracy"], W,
+                                      lift=RECORD_LIFT * size)
+            m, sides = corners.shape[:2]
+            faces = np.column_stack([np.full(m, sides), np.arange(m * sides).reshape(m, sides)])
+            discs = pv.PolyData(corners.reshape(-1, 3), faces.ravel())
+            colour = _level_colours(k)
+            # the first level drawn most opaque: deeper levels' larger discs would hide it
+            plotter.add_mesh(discs, color=colour, opacity=self.opacity / (1.0 + 0.5 * (len(entries))),
+                             lighting=False, show_edges=True,
+                             edge_color=tuple(0.6 * c for c in colour), line_width=1)
+            shaped |= W is not None
+            entries.append([f"level {k}: {len(idx):,}, a = {lv['accuracy']:.3g}", colour, "circle"])
+        if entries:
+            head = "records (" + ("ellipses" if shaped else "discs") + " of radius a R_i)"
+            entries.insert(0, [head, "black", "none"])
+            # rows of about 3 % of the window's height; the width fits the longest label
+            w_px, h_px = plotter.window_size
+            rows = min(0.032 * len(entries), 0.32)
+            chars = max(len(e[0]) for e in entries) + 3
+            width = min(0.6, 0.45 * chars * (rows / len(entries)) * h_px / w_px + 0.02)
+            legend = plotter.add_legend(entries, bcolor="white", border=True, loc="lower right", size=(width, rows))
+            legend.SetPosition(1.0 - width - 0.01, 0.02)     # (pyvista places "right" by the height)
+
+
+def read_cache_layer(path: str | os.PathLike, show=None) -> CacheLayer:
+    """A :class:`CacheLayer` of the cache file ``path``.  Any lbl_illum cache file is
+    drawn, whatever scene and settings it was made for; anything else is refused with
+    one line (:class:`InputError`, from :func:`lbl_illum.cache.read_cache_file`)."""
+    from .cache import read_cache_file
+
+    layer = CacheLayer.from_cache(read_cache_file(path), show)
+    if show is not None:
+        missing = [k for k in show if not 0 <= k < len(layer.levels)]
+        if missing:
+            raise InputError(f"{Path(path).name}: no level {missing[0]} (the file has levels 0 to "
+                             f"{len(layer.levels) - 1})")
+    return layer
 
 
 # ---------------------------------------------------------------------------
