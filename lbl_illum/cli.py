@@ -284,6 +284,8 @@ studies:
   scene-requires      records and rays go only where the queries need them
   figure5             the paper's Figure 5: blocks on a table, cache against pure Monte Carlo at equal rays
   deep-room           window portals and unglazed openings on a deep room, with and without portals
+  sky-component       sky component through roof and façade openings against an independent integral, 16 skies
+  office-daylight     office DF against Radiance rtrace (overcast; clear sky with sun) and gensky's horizon blend
 """
 
 

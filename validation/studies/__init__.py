@@ -29,6 +29,8 @@ STUDIES = {
     "scene-requires": "scene_requires",
     "figure5": "figure5",
     "deep-room": "deep_room",
+    "sky-component": "sky_component",
+    "office-daylight": "office_daylight",
 }
 
 
