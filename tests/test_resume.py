@@ -110,8 +110,11 @@ def test_interrupted_in_memory_cache_can_go_on(office, reference):
 
 
 CHILD = textwrap.dedent("""
-    import sys, time
+    import signal, sys, time
     import numpy as np
+    # Ctrl-C as at a terminal, even when this test runs in a background job (which starts
+    # its children with SIGINT ignored, and Python then installs no handler of its own)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     from lbl_illum import Options, load_scene, read_points
     from lbl_illum.integrator import Integrator
 
