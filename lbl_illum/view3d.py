@@ -49,8 +49,8 @@ import numpy as np
 from .errors import InputError
 from .files import atomic_write_bytes
 
-__all__ = ["GeometryLayer", "PointLayer", "CacheLayer", "ViewFrame", "record_outlines", "read_cache_layer", "render", "check_view_path", "offscreen_available",
-           "require_pyvista", "SCREENSHOT_FORMATS"]
+__all__ = ["GeometryLayer", "PointLayer", "CacheLayer", "ViewFrame", "record_outlines", "read_cache_layer", "render",
+           "check_view_path", "offscreen_available", "require_pyvista", "SCREENSHOT_FORMATS"]
 
 SCREENSHOT_FORMATS = (".png",)
 #: Opacity of the scene's surfaces.
@@ -320,9 +320,9 @@ class CacheLayer:
             keep = np.all((P >= frame.lo) & (P <= frame.hi), axis=1)
             if frame.cut_above is not None:
                 keep &= ~((np.abs(N[:, 2]) > 0.99) & (P[:, 2] > frame.cut_above))
-            idx = np.flatnonzero(keep)
+            idx = np.flatnonzero(keep) if lv["accuracy"] > 0.0 else np.zeros(0, np.int64)   # a = 0: no domain
             self.drawn[k] = int(len(idx))
-            if len(idx) == 0 or lv["accuracy"] <= 0.0:
+            if len(idx) == 0:
                 continue
             W = None if lv.get("W") is None else np.asarray(lv["W"])[idx]
             corners = record_outlines(P[idx], N[idx], np.asarray(lv["R"])[idx], lv["accuracy"], W,
