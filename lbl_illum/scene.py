@@ -41,6 +41,7 @@ except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
 from .errors import InputError, check_keys, get_number, get_vector, plural, show
+from .files import read_text_file
 from .geometry import (MAX_COORDINATE, Triangles, degenerate_mask, duplicate_mask, load_mesh_file,
                        polygon_triangles, shape_from_table)
 from .materials import Material, MaterialTable, material_from_table
@@ -113,19 +114,7 @@ def load_scene(path: str | Path) -> Scene:
     """
     path = Path(path)
     name = path.name or str(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a folder, not a scene file") from None
-    except OSError as exc:
-        raise InputError(f"{name}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw.count(b"\n", 0, exc.start) + 1
-        raise InputError(f"{name}: line {line}: not UTF-8 text (byte {exc.start})") from None
+    text = read_text_file(path, " scene")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

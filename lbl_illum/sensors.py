@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError, show
-from .files import atomic_write_text
+from .files import atomic_write_text, read_text_file
 from .geometry import MAX_COORDINATE
 
 __all__ = ["read_points", "write_points", "write_results", "read_results", "check_output_path", "check_area_name",
@@ -61,25 +61,6 @@ def check_area_name(name: str, where: str) -> str:
     raise InputError(f"{where}: area name {show(name)} looks like a number")
 
 
-def _read_text(path: Path, what: str = "") -> str:
-    """The UTF-8 text of a file; a missing, unreadable or non-UTF-8 file is an
-    :class:`InputError` naming it (and the line of the first bad byte)."""
-    name = path.name or str(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a folder, not a{what} file") from None
-    except OSError as exc:
-        raise InputError(f"{name}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise InputError(f"{name}: line {line}: not UTF-8 text (byte {exc.start})") from None
-
-
 def _lines(text: str):
     """(line number, line) pairs, lines split at LF (CR LF and CR-only endings are read
     too), numbered as editors number them; unlike ``str.splitlines`` the separators
@@ -96,7 +77,7 @@ def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas:
     """
     path = Path(path)
     name = path.name or str(path)
-    text = _read_text(path, " points")
+    text = read_text_file(path, " points")
     rows, areas = [], []
     for number, line in _lines(text):
         body = line.split("#", 1)[0].strip()
@@ -218,7 +199,7 @@ def read_results(path: str | os.PathLike, unit_scale: float = 1.0):
     if path.suffix.lower() != ".csv":
         points, normals, areas = read_points(path, unit_scale, with_areas=True)
         return points, normals, {}, areas
-    lines = [(n, l) for n, l in _lines(_read_text(path, " results")) if l.strip()]
+    lines = [(n, l) for n, l in _lines(read_text_file(path, " results")) if l.strip()]
     if not lines:
         raise InputError(f"{path.name}: empty file")
     first, top = lines[0]
