@@ -87,6 +87,12 @@ MAX_PASSES = 64
 #: Hemisphere rays traced in one batch: the records of a pass are traced in blocks of at
 #: most this many rays, which bounds the temporary arrays of a pass (about 300 bytes a ray).
 MAX_BATCH_RAYS = 1 << 20
+#: Queries of one level taken at a time.  A level with more queries is placed and
+#: evaluated block by block, depth first (:meth:`Integrator._solve_level`): every block
+#: that is done holds complete records, so an interruption loses at most the open block
+#: of each level, and the memory held for records waiting for their values is bounded.
+#: Results depend on it only where a level has more queries than this (docs/cache-files.md).
+QUERY_BLOCK = 1 << 16
 
 # random-stream tags
 _TAG_HEMISPHERE, _TAG_DIRECT_HITS, _TAG_DIRECT_QUERIES, _TAG_PROBE = 1, 2, 3, 4
@@ -827,37 +833,78 @@ class Integrator:
         if cache is not None:
             self.cache = cache
 
-    def _keep_evaluated(self, start, evaluated) -> bool:
-        """After an interruption: drop the records of the levels not in ``evaluated``
-        that this run placed (they have no values yet), restoring each such level's
-        octree root from ``start`` — (count, center, half) per level at the start.
-        Returns whether an evaluated level gained records."""
-        gained = False
+    def _open_block(self, k) -> None:
+        """Remember level k's records and octree root as a block of its queries begins."""
+        lv = self.cache.levels[k]
+        self._open[k] = (lv.count, lv.node_center[0].copy(), float(lv.node_half[0]))
+
+    def _close_block(self, k) -> None:
+        """Level k's block is evaluated: its records are complete."""
+        self._open.pop(k, None)
+
+    def _drop_unevaluated(self, start) -> bool:
+        """After an interruption: drop the records of the open blocks (placed, without
+        values), each level going back to the records and octree root it had when its
+        open block began, and the records of levels that do not interpolate (accuracy 0:
+        one record per query, never reused) back to ``start`` — (count, center, half) per
+        level at the start of the run.  Returns whether a level that interpolates kept
+        records this run made."""
         for k, lv in enumerate(self.cache.levels):
-            count, center, half = start[k]
-            if lv.count > count:
-                if k in evaluated:
-                    gained = gained or lv.accuracy > 0
-                else:
-                    lv.truncate(count, center, half)
-        return gained
+            state = start[k] if lv.accuracy == 0.0 else self._open.get(k)
+            if state is not None and lv.count > state[0]:
+                lv.truncate(*state)
+        self._open = {}
+        return any(lv.count > start[k][0] and lv.accuracy > 0 for k, lv in enumerate(self.cache.levels))
+
+    def _solve_level(self, k, P, Ns, Ng, stats: RunStats):
+        """Make level k's records for the queries (P, Ns, Ng) and give them values.
+
+        The queries are taken in blocks of ``QUERY_BLOCK``.  For each: place the records
+        it needs (:meth:`place_level`), solve level k+1 for their hemisphere hits
+        (recursively, depth first), then evaluate them from level k+1's records
+        (:meth:`evaluate_level`).  Returns, for a level that does not interpolate, each
+        query's own record (else None).
+        """
+        B = self.options.bounces
+        own_parts = []
+        n = len(P)
+        blocks = max(1, -(-n // QUERY_BLOCK))
+        for b in range(blocks):
+            part = slice(b * QUERY_BLOCK, (b + 1) * QUERY_BLOCK)
+            self._open_block(k)
+            where = f", block {b + 1} of {blocks}" if blocks > 1 else ""
+            self._tick(f"placing level {k} ({len(P[part])} queries{where})")
+            pending, own = self.place_level(k, P[part], Ns[part], Ng[part], stats)
+            own_parts.append(own)
+            hP = pending.cat("hit_P")
+            deeper = len(hP) > 0 and k + 1 <= B and self._level_active(k + 1)
+            own_next = self._solve_level(k + 1, hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), stats) \
+                if deeper else None
+            self._tick(f"evaluating level {k}{where}")
+            next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
+            self.evaluate_level(k, pending, next_answer)
+            self._close_block(k)
+        if any(own is None for own in own_parts):
+            return None
+        return np.concatenate(own_parts)
 
     # -- the whole calculation -----------------------------------------------------------
     def compute(self, points, normals) -> IlluminanceResult:
         """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``.
 
-        Interruptions.  Records are placed top-down and get their values bottom-up, so
-        when the calculation stops early (KeyboardInterrupt, SIGTERM with a cache file
-        attached, any exception) the levels it has evaluated hold complete records and
-        the others hold records without values.  Those are dropped (each level returns
-        to the records and octree it had before), the rest is kept and, with a cache
-        file attached (:meth:`attach_cache_file`), written before the exception goes
-        on; the exception then carries ``saved_cache`` (the file) and
-        ``saved_records`` (records per level in it).  A second run over the same points
-        with the same file and seed places the unevaluated levels exactly as the first
-        did (their records and random streams are the same), finds every query of the
-        next level covered by the kept records, and so gives bit-identical results to a
-        run that was never interrupted.
+        Interruptions.  Each level's queries are taken in blocks (``QUERY_BLOCK``); a
+        block's records are placed, the level below is solved for their hits, and then
+        they get their values (:meth:`_solve_level`).  When the calculation stops early
+        (KeyboardInterrupt, SIGTERM with a cache file attached, any exception) the blocks
+        that are done hold complete records and the open block of each level holds
+        records without values.  Those are dropped (each level returns to the records and
+        octree it had when its open block began), the rest is kept and, with a cache file
+        attached (:meth:`attach_cache_file`), written before the exception goes on; the
+        exception then carries ``saved_cache`` (the file) and ``saved_records`` (records
+        per level in it).  A second run over the same points with the same file and seed
+        finds every query of a finished block covered and places the open blocks exactly
+        as the first run did (their records and random streams are the same), and so
+        gives bit-identical results to a run that was never interrupted.
         """
         from .cache import deferred_interrupts, record_settings, sigterm_as_interrupt
 
@@ -887,49 +934,27 @@ class Integrator:
 
         # what each level held before this run, to return to if it is interrupted
         start = [(lv.count, lv.node_center[0].copy(), float(lv.node_half[0])) for lv in self.cache.levels]
-        evaluated = set()
+        self._open = {}
         with sigterm_as_interrupt() if self.cache_file is not None else contextlib.nullcontext():
             try:
-                # placement, level by level
-                levels = []          # (pending, own_record, query arrays) per level
-                qP, qNs, qNg = points, normals, normals
-                for k in range(B + 1):
-                    if not self._level_active(k) or len(qP) == 0:
-                        break
-                    self._tick(f"placing level {k} ({len(qP)} queries)")
-                    pending, own = self.place_level(k, qP, qNs, qNg, stats)
-                    levels.append((pending, own, qP, qNs))
-                    qP, qNs, qNg = pending.cat("hit_P"), pending.cat("hit_Ns"), pending.cat("hit_Ng")
-                    if k + 1 > B or not self._level_active(k + 1):
-                        break
-
-                # evaluation, deepest level first
-                next_answer = None
-                for k in range(len(levels) - 1, -1, -1):
-                    self._tick(f"evaluating level {k}")
-                    pending, _, _, _ = levels[k]
-                    if k + 1 < len(levels):
-                        _, own_next, P_next, N_next = levels[k + 1]
-                        next_answer = self._answer(k + 1, P_next, N_next, own_next)
-                    else:
-                        next_answer = None
-                    self.evaluate_level(k, pending, next_answer)
-                    evaluated.add(k)
-                evaluated.update(range(len(self.cache.levels)))
+                # placement top-down and evaluation bottom-up, block by block
+                own0 = None
+                solved = len(points) > 0 and self._level_active(0)
+                if solved:
+                    own0 = self._solve_level(0, points, normals, normals, stats)
 
                 # answers at the query points
                 self._tick("direct light at the points")
                 origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
                 direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
                                                  light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
-                if levels:
-                    _, own0, _, _ = levels[0]
+                if solved:
                     indirect = self._answer(0, points, normals, own0)
                 else:
                     indirect = np.zeros_like(direct)
             except BaseException as exc:
                 with deferred_interrupts():
-                    gained = self._keep_evaluated(start, evaluated)
+                    gained = self._drop_unevaluated(start)
                     if self.cache_file is not None and gained:
                         exc.saved_records = self.cache_file.write(self.cache)
                         exc.saved_cache = str(self.cache_file.path)

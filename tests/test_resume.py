@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from lbl_illum import IrradianceCache, Options, load_scene, read_points
+from lbl_illum import integrator
 from lbl_illum.integrator import Integrator
 
 from conftest import EXAMPLES, ROOT
@@ -116,8 +117,11 @@ CHILD = textwrap.dedent("""
     # its children with SIGINT ignored, and Python then installs no handler of its own)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     from lbl_illum import Options, load_scene, read_points
+    from lbl_illum import integrator
     from lbl_illum.integrator import Integrator
 
+    if len(sys.argv) > 5:
+        integrator.QUERY_BLOCK = int(sys.argv[5])
     scene = load_scene(sys.argv[1])
     points, normals = read_points(sys.argv[2], scene.unit_scale)
     points, normals = points[::3], normals[::3]
@@ -125,7 +129,7 @@ CHILD = textwrap.dedent("""
     class WaitThere:
         # stops at the given stage until a signal comes (a run that is slow there)
         def describe(self, text):
-            if text.startswith(sys.argv[4]):
+            if sys.argv[4] in text:
                 print("READY", flush=True)
                 time.sleep(60)
         def update(self, rays):
@@ -173,6 +177,36 @@ def test_signalled_subprocess_saves_and_resumes(office, reference, tmp_path, sig
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_subprocess_terminated_while_placing_resumes(office, blocked_reference, tmp_path):
+    """SIGTERM while level 0's second block is being placed: the first block's records
+    (all levels) are saved, and the next run finishes with the uninterrupted result."""
+    scene, points, normals = office
+    stage = f"placing level 0 ({len(points) - SMALL_BLOCK} queries, block 2 of 2)"
+    path = tmp_path / "office.lblcache"
+    script = tmp_path / "child.py"
+    script.write_text(CHILD)
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    child = subprocess.Popen([sys.executable, str(script), str(EXAMPLES / "office" / "scene.toml"),
+                              str(EXAMPLES / "office" / "grid.pts"), str(path), stage, str(SMALL_BLOCK)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = child.stdout.readline()
+        assert line.strip() == "READY", child.stderr.read()
+        child.send_signal(signal.SIGTERM)
+        out, err = child.communicate(timeout=60)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert child.returncode == 130, err
+    saved = IrradianceCache.load(path).record_counts
+    assert saved[0] > 0 and all(saved)
+    second = Integrator(scene, OPTS)
+    second.attach_cache_file(path)
+    result = second.compute(points, normals)
+    assert np.array_equal(result.rgb, blocked_reference.rgb)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_killed_subprocess_leaves_the_old_file_intact(office, tmp_path):
     """SIGKILL cannot be caught: nothing new is saved, and the file written before is untouched."""
     scene, points, normals = office
@@ -197,3 +231,77 @@ def test_killed_subprocess_leaves_the_old_file_intact(office, tmp_path):
     time.sleep(0.05)
     assert path.read_bytes() == before
     assert IrradianceCache.load(path).record_counts == first.cache.record_counts
+
+
+# -- levels taken in blocks of queries ------------------------------------------------------
+
+#: a block size that splits every level of the test run (27 sensors, 128 samples)
+SMALL_BLOCK = 16
+
+
+@pytest.fixture
+def small_blocks(monkeypatch):
+    monkeypatch.setattr(integrator, "QUERY_BLOCK", SMALL_BLOCK)
+
+
+@pytest.fixture
+def blocked_reference(office, small_blocks):
+    scene, points, normals = office
+    return Integrator(scene, OPTS).compute(points, normals)
+
+
+class StopAfter:
+    """Raises ``error`` the ``count``-th time the integrator reaches a stage."""
+
+    def __init__(self, stage, count, error=KeyboardInterrupt):
+        self.stage, self.count, self.error = stage, count, error
+        self.seen = 0
+
+    def describe(self, text):
+        if text.startswith(self.stage):
+            self.seen += 1
+            if self.seen == self.count:
+                raise self.error()
+
+    def update(self, rays):
+        pass
+
+
+@pytest.mark.parametrize("stage, count", [
+    ("placing level 0", 2),        # level 0's second block: the first one's whole tree is kept
+    ("placing level 1", 40),       # in the middle of level 1's blocks under level 0's first block
+    ("placing level 2", 100),
+    ("evaluating level 1", 30),
+])
+def test_interruption_during_placement_keeps_the_finished_blocks(office, blocked_reference, tmp_path, stage, count):
+    """With the levels split into blocks, a run stopped while it is placing records keeps
+    every block finished before, and the resumed run gives the uninterrupted result."""
+    scene, points, normals = office
+    ref = blocked_reference
+    assert len(points) > SMALL_BLOCK                      # level 0 itself has two blocks
+    path = tmp_path / "office.lblcache"
+    first = Integrator(scene, OPTS, progress=StopAfter(stage, count))
+    first.attach_cache_file(path)
+    with pytest.raises(KeyboardInterrupt) as info:
+        first.compute(points, normals)
+    saved = IrradianceCache.load(path).record_counts
+    assert info.value.saved_records == saved
+    assert 0 < sum(saved) < sum(ref.stats.records)
+    assert all(0 < s <= r for s, r in zip(saved[1:], ref.stats.records[1:]))
+    if stage == "placing level 0":
+        assert saved[0] > 0                                # level 0's first block, evaluated
+    second = Integrator(scene, OPTS)
+    second.attach_cache_file(path)
+    result = second.compute(points, normals)
+    assert np.array_equal(result.rgb, ref.rgb)
+    assert result.stats.records == ref.stats.records
+    assert sum(result.stats.new_records) == sum(ref.stats.records) - sum(saved)
+
+
+def test_blocks_change_the_records_not_the_accuracy(office, reference, blocked_reference):
+    """Blocks change which records are made (later blocks reuse earlier ones) but not what
+    they estimate: the two runs agree within their noise."""
+    whole, blocked = reference["round"], blocked_reference
+    assert blocked.stats.records != whole.stats.records
+    rel = blocked.illuminance / whole.illuminance - 1.0
+    assert abs(rel.mean()) < 0.03 and np.abs(rel).max() < 0.10
