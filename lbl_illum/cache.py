@@ -503,7 +503,9 @@ def read_cache_file(path: str | os.PathLike) -> CacheData:
     Raises :class:`InputError` with one line naming the file for a missing or unreadable
     file, a truncated or damaged archive (zip CRC, checksum), a header that is not an
     lbl_illum cache's, another format version, and arrays whose names, types, shapes or
-    values (non-finite numbers, radii ≤ 0) do not fit the header.
+    values do not fit the header or are not physical (non-finite numbers, radii ≤ 0,
+    normals that are not unit vectors, negative irradiance): a file whose checksum is right
+    but that no run of this program wrote.
     """
     name = Path(path).name
     try:
@@ -621,11 +623,40 @@ def _check_contents(data: CacheData, name: str) -> None:
                 bad(f"array {key} holds non-finite numbers")
         if n and not np.all(data.arrays[f"L{k}_R"] > 0):
             bad(f"array L{k}_R holds radii <= 0")
+        if n:
+            _check_physics(data.arrays, k, bad)
         if n and h.get("version") != 1 and np.any(np.abs(data.arrays[f"L{k}_P"] - lv["center"]) > lv["half"]):
             bad(f"level {k}: records outside the root cube")
     extra = sorted(set(data.arrays) - names)
     if extra:
         bad(f"unexpected array {extra[0]}")
+
+
+#: Largest departure of a stored normal's length from 1.  The writer stores unit float64
+#: normals rounded to float32 (|N| − 1 below 1e-7); a larger departure means the file was
+#: edited or written by something else, and Eq. 6's normal term √(1 − N·N_i) would then be
+#: undefined or wrong.
+NORMAL_LENGTH_TOLERANCE = 1e-3
+
+
+def _check_physics(arrays: dict, k: int, bad) -> None:
+    """Refuse record values of level ``k`` that no evaluation of Eq. 2 gives (finite values
+    and positive radii are checked before): a normal N_i that is not a unit vector
+    (|N_i| outside 1 ± :data:`NORMAL_LENGTH_TOLERANCE`), or a negative irradiance E_i — an
+    integral of non-negative radiance over the hemisphere [lux] — in any channel."""
+    N = arrays[f"L{k}_N"].astype(np.float64)
+    length = np.sqrt(np.einsum("ij,ij->i", N, N))
+    off = np.abs(length - 1.0) > NORMAL_LENGTH_TOLERANCE
+    if off.any():
+        i = int(np.argmax(off))
+        bad(f"array L{k}_N: record {i} has a normal of length {length[i]:.6g}, not a unit vector "
+            f"({int(off.sum())} such records)")
+    E = arrays[f"L{k}_E"]
+    negative = (E < 0).any(axis=1)
+    if negative.any():
+        i = int(np.argmax(negative))
+        bad(f"array L{k}_E: record {i} has a negative irradiance {float(E[i].min()):.6g} lux "
+            f"({int(negative.sum())} such records)")
 
 
 def _level_keys(P: np.ndarray, N: np.ndarray) -> np.ndarray:

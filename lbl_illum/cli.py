@@ -668,7 +668,16 @@ def _run_validate(args) -> int:
     report_dir = Path(args.report)
     if report_dir.exists() and not report_dir.is_dir():
         raise InputError(f"{args.report}: not a folder")
+    why_not = getattr(studies, "unavailable", lambda name: None)
+    if args.study != "all" and (why := why_not(args.study)) is not None:
+        raise InputError(f"validate {args.study}: cannot run here: {why}")
+    start, written, skipped = time.perf_counter(), [], []
     for name in names:
+        why = why_not(name) if args.study == "all" else None
+        if why is not None:      # said even with --quiet: the summary would otherwise hide it
+            print(f"lbl-illum: validate {name}: skipped: {why}", file=sys.stderr)
+            skipped.append(name)
+            continue
         t0 = time.perf_counter()
         bar = tqdm(total=None, unit="run", delay=1.0, file=sys.stderr, disable=True if args.quiet else None,
                    leave=False, dynamic_ncols=True, desc=name)
@@ -687,11 +696,74 @@ def _run_validate(args) -> int:
             folder = run_study(name, ctx, report_dir, command_dir=args.report)
         finally:
             bar.close()
+        written.append(name)
         if not args.quiet:
             print(f"lbl-illum: validate {name}{' (quick)' if args.quick else ''}: {ctx.runs} runs, "
                   f"{ctx.records:,} records, {ctx.rays:,} rays in {time.perf_counter() - t0:.1f} s "
                   f"-> {folder / 'report.md'}", file=sys.stderr)
+    if args.study == "all" and not args.quiet:
+        from .errors import plural
+
+        left = f", {len(skipped)} skipped ({', '.join(skipped)})" if skipped else ""
+        print(f"lbl-illum: validate all{' (quick)' if args.quick else ''}: {plural(len(written), 'report')} "
+              f"written{left} in {time.perf_counter() - start:.1f} s -> {report_dir}", file=sys.stderr)
     return 0
+
+
+#: Largest -x or -y of ``render`` [pixels] (OpenEXR and TIFF take more, but the one batch of
+#: camera rays would not fit any machine's memory long before).
+MAX_IMAGE_SIDE = 16384
+#: Memory a camera ray (one pixel sample) takes through ``render``'s single batch [bytes]:
+#: measured 0.45 KiB on examples/office (1024 × 1024 pixels, one sample, through glass and
+#: onto diffuse walls: 470 MB above the 160 MB the process starts with); twice that for
+#: scenes whose glass splits more paths.
+BYTES_PER_CAMERA_RAY = 1024
+
+
+def _available_memory() -> int | None:
+    """Memory available to a new allocation [bytes] (Linux ``MemAvailable``, else the free
+    physical pages), or None when the system does not say."""
+    import os
+
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _check_render_size(args) -> None:
+    """Refuse an image that cannot be rendered before any work: -x, -y or --pixel-samples
+    below 1, a side above :data:`MAX_IMAGE_SIDE`, or more camera rays (x · y · pixel samples,
+    all traced in one batch) than the available memory holds at
+    :data:`BYTES_PER_CAMERA_RAY` each.  The count is an upper bound: the view's aspect may
+    reduce one side (rpict's square pixels), never enlarge it."""
+    sizes = {}
+    for name, flag in (("x", "-x"), ("y", "-y"), ("pixel_samples", "--pixel-samples")):
+        value = getattr(args, name, None)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise InputError(f"{flag} must be a positive whole number, got {value}")
+        if flag != "--pixel-samples" and value > MAX_IMAGE_SIDE:
+            raise InputError(f"{flag} {value} is more than the {MAX_IMAGE_SIDE} pixels allowed per side")
+        sizes[name] = value
+    rays = sizes.get("x", 512) * sizes.get("y", 512) * sizes.get("pixel_samples", 1)
+    need = rays * BYTES_PER_CAMERA_RAY
+    have = _available_memory()
+    if have is not None and need > have:
+        from .errors import plural
+
+        raise InputError(f"-x {sizes.get('x', 512)} -y {sizes.get('y', 512)} with "
+                         f"{plural(sizes.get('pixel_samples', 1), 'pixel sample')} is {rays:,} camera rays, traced in "
+                         f"one batch: about {need / 2 ** 30:.3g} GiB of memory, more than the {have / 2 ** 30:.3g} GiB "
+                         "available; render a smaller image")
 
 
 def _one_line(exc: BaseException) -> str:
@@ -715,6 +787,7 @@ def main(argv=None) -> int:
         if args.command == "view":
             return _run_view(args)
         if args.command == "render":
+            _check_render_size(args)
             from .render import render_command
             return render_command(args)
         if args.command == "validate":

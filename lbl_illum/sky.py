@@ -49,6 +49,23 @@ References
 5. Radiance ``gendaylit`` (J.-J. Delaunay 1994, Fraunhofer ISE; G. Ward, J. Wienold) and
    ``gendaymtx`` (I. Ashdown): the Perez model as used in practice, whose conventions
    (Δ ≥ 0.2 for 1.065 < ε < 2.8, cos Z ≥ 0.01, L ≥ 0) this module follows.
+6. J. W. Spencer, "Fourier series representation of the position of the Sun", Search 2(5),
+   172 (1971): the Sun–Earth distance factor, at most 1.0351 (early January).
+7. S. Darula, R. Kittler, C. A. Gueymard, "Reference luminous solar constant and solar
+   luminance for illuminance calculations", Solar Energy 79(5), 559–565 (2005): the
+   extraterrestrial normal illuminance at the mean distance, 133 334 lx.
+
+Input checks.  Every value of a ``[sky]`` table is a finite number in its range, or the
+table is refused naming the key (:class:`~lbl_illum.errors.InputError`).  The CIE skies
+are shapes scaled by ``horizontal_illuminance`` (or ``zenith_luminance``), so any finite
+value ≥ 0 is accepted.  The Perez inputs are measurements of real daylight on which the
+model's ε, Δ and efficacies depend, so they are bounded by what reaches the top of the
+atmosphere: direct normal and diffuse horizontal irradiance ≤ :data:`MAX_EXTRATERRESTRIAL_IRRADIANCE`
+(1367 W/m² × 1.0351 = 1415 W/m²), illuminance ≤ :data:`MAX_EXTRATERRESTRIAL_ILLUMINANCE`
+(133 334 lx × 1.0351 = 138 011 lx).  The sky brightness Δ that results has no such bound
+(Δ = E_dh m / E_0 grows with the air mass m, up to 38 at the horizon); the model was fitted
+for Δ up to about 0.6 (``gendaylit`` clamps to 0.6 with a warning), and a larger Δ is used
+as it is, or refused when it makes the distribution negative everywhere.
 """
 
 from __future__ import annotations
@@ -129,6 +146,18 @@ def _set(obj, **values) -> None:
         object.__setattr__(obj, k, v)
 
 
+def _check_finite(obj, name: str, minimum: float | None = None, maximum: float | None = None) -> None:
+    """Raise ValueError unless field ``name`` of ``obj`` is a finite number within [minimum, maximum]."""
+    value = getattr(obj, name)
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or \
+            not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if (minimum is not None and value < minimum) or (maximum is not None and value > maximum):
+        bounds = f"within {minimum:g} and {maximum:g}" if minimum is not None and maximum is not None else (
+            f">= {minimum:g}" if minimum is not None else f"<= {maximum:g}")
+        raise ValueError(f"{name} must be {bounds}, got {value!r}")
+
+
 @dataclass(frozen=True)
 class Sky:
     """Base class.  ``horizontal_illuminance`` is the sky's own unobstructed E_h [lux]."""
@@ -142,6 +171,11 @@ class Sky:
     #: whether :meth:`sky_luminance` is cheap enough to evaluate on every direction (it must
     #: then accept directions below the horizon, whose values are discarded)
     _cheap = False
+
+    def __post_init__(self):
+        _check_finite(self, "horizontal_illuminance", minimum=0.0)
+        _check_finite(self, "ground_reflectance", minimum=0.0, maximum=1.0)
+        _check_finite(self, "sun_horizontal_illuminance", minimum=0.0)
 
     @property
     def is_dark(self) -> bool:
@@ -303,6 +337,11 @@ class CIEGeneralSky(Sky):
     name = "cie-general"
 
     def __post_init__(self):
+        super().__post_init__()
+        if self.sun_altitude is not None:
+            _check_finite(self, "sun_altitude", -90.0, 90.0)
+        if self.sun_azimuth is not None:
+            _check_finite(self, "sun_azimuth")
         if self.sky_type not in CIE_GENERAL_SKY_TYPES:
             raise ValueError(f"sky_type must be 1…15, got {self.sky_type!r}")
         a, b, c, d, e, _ = CIE_GENERAL_SKY_TYPES[self.sky_type]
@@ -617,10 +656,12 @@ class PerezSky(Sky):
     name = "perez"
 
     def __post_init__(self):
-        if not self.clearness >= 1.0:
-            raise ValueError(f"clearness must be >= 1, got {self.clearness!r}")
-        if not self.brightness >= 0.0:
-            raise ValueError(f"brightness must be >= 0, got {self.brightness!r}")
+        super().__post_init__()
+        _check_finite(self, "sun_altitude", -90.0, 90.0)
+        _check_finite(self, "sun_azimuth")
+        _check_finite(self, "clearness", minimum=1.0)
+        _check_finite(self, "brightness", minimum=0.0)
+        _check_finite(self, "direct_normal_illuminance", minimum=0.0)
         _set(self, _sun=sun_vector(self.sun_altitude, self.sun_azimuth),
              _coef=perez_coefficients(self.clearness, self.brightness, 90.0 - self.sun_altitude))
         scale = 0.0
@@ -686,6 +727,15 @@ SKY_MODELS = {cls.name: cls for cls in (UniformSky, CIEOvercastSky, CIEGeneralSk
 SKY_TYPES = ("uniform", "cie-overcast", "cie-general", *SKY_ALIASES, "perez", "none")
 #: Default diffuse-light dew point [°C] for the Perez efficacy model when none is given.
 DEFAULT_DEW_POINT = 10.0
+#: Largest Sun–Earth distance factor (E_0 / solar constant) of Spencer's (1971) formula, early January.
+MAX_DISTANCE_FACTOR = 1.0351
+#: Extraterrestrial normal irradiance at perihelion [W/m²]: no direct normal or diffuse
+#: horizontal irradiance at the ground exceeds it.
+MAX_EXTRATERRESTRIAL_IRRADIANCE = 1367.0 * MAX_DISTANCE_FACTOR
+#: Extraterrestrial normal illuminance at perihelion [lux] (Darula, Kittler & Gueymard 2005:
+#: 133 334 lx at the mean distance): no direct normal or diffuse horizontal illuminance at the
+#: ground exceeds it.
+MAX_EXTRATERRESTRIAL_ILLUMINANCE = 133334.0 * MAX_DISTANCE_FACTOR
 
 _COMMON_KEYS = ("type", "ground_reflectance")
 _SCALE_KEYS = ("horizontal_illuminance", "zenith_luminance")
@@ -697,8 +747,8 @@ def _sky_type(table: Mapping[str, Any], where: str) -> int:
     value = table.get("sky_type")
     if value is None:
         raise InputError(f"{where}: type 'cie-general' needs 'sky_type' (1…15; 12 is the CIE standard clear sky)")
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) or \
-            int(value) not in CIE_GENERAL_SKY_TYPES:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or \
+            value != int(value) or int(value) not in CIE_GENERAL_SKY_TYPES:
         raise InputError(f"{where}: 'sky_type' must be a whole number 1…15, got {value!r}")
     return int(value)
 
@@ -727,6 +777,8 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
     """
     if table is None:
         return NoSky()
+    if sun_position is not None:
+        _check_sun_position(sun_position, where)
     kind = table.get("type", "cie-overcast")
     if kind not in SKY_TYPES:
         raise InputError(f"{where}: 'type' must be one of {', '.join(SKY_TYPES)}, got {kind!r}")
@@ -744,7 +796,7 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
     common = {"ground_reflectance": rho, "sun_horizontal_illuminance": sun_horizontal_illuminance}
     if not general:
         if which == "zenith_luminance":
-            value = value * (np.pi if kind == "uniform" else 7.0 * np.pi / 9.0)
+            value = _finite_product(value, np.pi if kind == "uniform" else 7.0 * np.pi / 9.0, where, which)
         return SKY_MODELS[kind](horizontal_illuminance=value, **common)
     sky_type = _sky_type(table, where) if kind == "cie-general" else SKY_ALIASES[kind]
     a, b, c, d, e, _ = CIE_GENERAL_SKY_TYPES[sky_type]
@@ -757,8 +809,34 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
     else:
         common.update(sun_altitude=float(sun_position[0]), sun_azimuth=float(sun_position[1]) % 360.0)
     if which == "zenith_luminance":
-        return CIEGeneralSky.from_zenith_luminance(value, sky_type=sky_type, **common)
+        unit = CIEGeneralSky(horizontal_illuminance=1.0, sky_type=sky_type, **common)
+        value = _finite_product(value, 1.0 / unit.zenith_luminance, where, which)
     return CIEGeneralSky(horizontal_illuminance=value, sky_type=sky_type, **common)
+
+
+def _finite_product(value: float, factor: float, where: str, key: str) -> float:
+    """``value · factor``, the horizontal illuminance [lux] a ``zenith_luminance`` gives,
+    refused naming ``key`` when it is not a finite number (a value near the float range)."""
+    with np.errstate(over="ignore"):
+        product = float(np.float64(value) * np.float64(factor))
+    if not math.isfinite(product):
+        raise InputError(f"{where}: '{key}' {value:g} is too large (the sky's horizontal illuminance would not be "
+                         "a finite number)")
+    return product
+
+
+def _check_sun_position(sun_position, where: str) -> None:
+    """Refuse a sun position (altitude, azimuth) [°] that is not two finite numbers with
+    the altitude within ±90° (the [sun] table checks its own keys; this guards other callers)."""
+    try:
+        alt, az = (float(v) for v in sun_position)
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: the sun's position must be (altitude, azimuth) in degrees, "
+                         f"got {sun_position!r}") from None
+    if not (math.isfinite(alt) and math.isfinite(az)):
+        raise InputError(f"{where}: the sun's altitude and azimuth must be finite, got {alt:g}, {az:g}")
+    if not -90.0 <= alt <= 90.0:
+        raise InputError(f"{where}: the sun's altitude must be within -90 and 90 degrees, got {alt:g}")
 
 
 def _perez_from_table(table, where, sun_horizontal_illuminance, sun_position, day) -> PerezSky:
@@ -772,8 +850,17 @@ def _perez_from_table(table, where, sun_horizontal_illuminance, sun_position, da
     for k in keys:
         if k not in table:
             raise InputError(f"{where}: type 'perez' needs '{keys[0]}' and '{keys[1]}' (missing key '{k}')")
-    direct = get_number(table, keys[0], where, minimum=0.0)
-    diffuse = get_number(table, keys[1], where, minimum=0.0)
+    # measured daylight: at most what reaches the top of the atmosphere (module text)
+    top = MAX_EXTRATERRESTRIAL_IRRADIANCE if given_watts else MAX_EXTRATERRESTRIAL_ILLUMINANCE
+    unit = "W/m2" if given_watts else "lux"
+    values = []
+    for key in keys:
+        value = get_number(table, key, where, minimum=0.0)
+        if value > top:
+            raise InputError(f"{where}: '{key}' {value:g} {unit} is more than reaches the top of the atmosphere "
+                             f"({top:.6g} {unit} at the Sun's nearest)")
+        values.append(value)
+    direct, diffuse = values
     if direct > 0.0 and diffuse <= 0.0:
         raise InputError(f"{where}: '{keys[1]}' must be > 0 when '{keys[0]}' is (a sky with sun but no "
                          "diffuse light is outside the Perez model)")
@@ -785,8 +872,12 @@ def _perez_from_table(table, where, sun_horizontal_illuminance, sun_position, da
     try:
         return perez_sky(direct, diffuse, sun_position, irradiance=bool(given_watts), day=day, dew_point=dew,
                          ground_reflectance=rho, sun_horizontal_illuminance=sun_horizontal_illuminance)
-    except ValueError as exc:
-        raise InputError(f"{where}: {exc}") from None
+    except (ValueError, ArithmeticError) as exc:
+        # ε, Δ or the efficacies out of reach of the model (a diffuse value so small that
+        # ε = (E_dh + E_dn)/E_dh is infinite, or that divides by zero on the way)
+        reason = str(exc) if isinstance(exc, ValueError) and str(exc) else \
+            f"no Perez sky ({type(exc).__name__})"
+        raise InputError(f"{where}: {reason}; from '{keys[0]}' {direct:g} and '{keys[1]}' {diffuse:g}") from None
 
 
 def perez_sky(direct_normal: float, diffuse_horizontal: float, sun_position: tuple[float, float],

@@ -80,6 +80,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .errors import InputError, check_keys, get_number, get_vector
+from .geometry import MAX_COORDINATE
 
 __all__ = ["View", "VIEW_TYPES", "TYPE_NAMES", "view_from_string", "view_from_file",
            "view_from_header", "view_from_table", "views_from_table", "view_lines", "sample_offsets"]
@@ -101,10 +102,32 @@ _OPTION_FIELDS = {"p": "position", "d": "direction", "u": "up", "h": "horizontal
                   "v": "vertical", "o": "fore", "a": "aft", "s": "shift", "l": "lift"}
 #: Golden-ratio conjugate: the second coordinate of the pixel-sample lattice.
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+#: Each field's Radiance option, for messages.
+_FIELD_OPTIONS = {field: f"-v{letter}" for letter, field in _OPTION_FIELDS.items()}
+#: Largest eye coordinate, fore clipping distance and parallel view size [m]: the extent of
+#: any scene (:data:`lbl_illum.geometry.MAX_COORDINATE`; twice that for a view's size).
+MAX_VIEW_COORDINATE = MAX_COORDINATE
+#: Largest image shift or lift (``-vs``, ``-vl``) in image widths or heights.  Radiance sets
+#: no limit; rpiece's tiles use shifts of up to half their count.  Beyond this the rays of a
+#: perspective view would come near the float range.
+MAX_IMAGE_OFFSET = 1e6
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
+    """``v`` / |v|, computed after dividing by the largest component, so that a vector of
+    any finite, non-zero size gives its direction (neither |v|² overflowing at 1e200 nor
+    underflowing at 1e-200); zero for a zero vector."""
+    v = np.asarray(v, dtype=np.float64)
+    big = float(np.max(np.abs(v))) if v.size else 0.0
+    if not big > 0.0:
+        return np.zeros_like(v)
+    w = v / big
+    return w / np.linalg.norm(w)
+
+
+def _a(noun: str) -> str:
+    """``noun`` with its indefinite article."""
+    return f"{'an' if noun[:1] in 'aeiou' else 'a'} {noun}"
 
 
 def _number_text(value: float) -> str:
@@ -164,23 +187,33 @@ class View:
 
     def problem(self) -> str | None:
         """What makes the view illegal (Radiance's ``setview()`` checks), or None."""
-        values = [*self.position, *self.direction, *self.up, self.horizontal, self.vertical,
-                  self.shift, self.lift, self.fore, self.aft]
         if len(self.position) != 3 or len(self.direction) != 3 or len(self.up) != 3:
             return "position, direction and up need 3 numbers each"
-        if not all(math.isfinite(v) for v in values):
-            return "all view values must be finite"
+        for name, option in _FIELD_OPTIONS.items():
+            value = getattr(self, name)
+            if not all(math.isfinite(v) for v in (value if isinstance(value, tuple) else (value,))):
+                shown = " ".join(f"{v:g}" for v in value) if isinstance(value, tuple) else f"{value:g}"
+                return f"{option} ({name}) must be finite, got {shown}"
         if self.type not in VIEW_TYPES:
             return f"unknown view type '{self.type}' (valid: {', '.join(VIEW_TYPES)})"
+        far = [v for v in self.position if abs(v) > MAX_VIEW_COORDINATE]
+        if far:
+            return f"-vp (position) {far[0]:g} m is beyond ±{MAX_VIEW_COORDINATE:g} m"
+        for name in ("shift", "lift"):
+            if abs(getattr(self, name)) > MAX_IMAGE_OFFSET:
+                return (f"{_FIELD_OPTIONS[name]} ({name}) {getattr(self, name):g} image "
+                        f"{'widths' if name == 'shift' else 'heights'} is beyond ±{MAX_IMAGE_OFFSET:g}")
         if self.fore < -FTINY or self.aft < -FTINY or (self.aft > FTINY and self.aft <= self.fore):
             return f"illegal fore/aft clipping distances -vo {self.fore:g} -va {self.aft:g}"
-        d = np.asarray(self.direction)
-        u = np.asarray(self.up)
-        if np.linalg.norm(d) <= 0.0:
+        if self.fore > MAX_VIEW_COORDINATE:
+            return f"-vo (fore) {self.fore:g} m is beyond {MAX_VIEW_COORDINATE:g} m"
+        d = _unit(self.direction)
+        u = _unit(self.up)
+        if not d.any():
             return "zero view direction (-vd)"
-        if np.linalg.norm(u) <= 0.0:
+        if not u.any():
             return "zero view up vector (-vu)"
-        if np.linalg.norm(np.cross(_unit(d), _unit(u))) <= FTINY:
+        if np.linalg.norm(np.cross(d, u)) <= FTINY:
             return "view up (-vu) parallel to view direction (-vd)"
         h, v, t = self.horizontal, self.vertical, self.type
         if h <= FTINY:
@@ -192,9 +225,14 @@ class View:
         open_h = t == "v"
         open_v = t in "vc"
         if limit_h is not None and (h >= limit_h - FTINY if open_h else h > limit_h + FTINY):
-            return f"illegal horizontal view size -vh {h:g} for a {VIEW_TYPES[t]} view"
+            return (f"illegal horizontal view size -vh {h:g} for {_a(VIEW_TYPES[t])} view "
+                    f"({'below' if open_h else 'at most'} {limit_h:g} degrees)")
         if limit_v is not None and (v >= limit_v - FTINY if open_v else v > limit_v + FTINY):
-            return f"illegal vertical view size -vv {v:g} for a {VIEW_TYPES[t]} view"
+            return (f"illegal vertical view size -vv {v:g} for {_a(VIEW_TYPES[t])} view "
+                    f"({'below' if open_v else 'at most'} {limit_v:g} degrees)")
+        if t == "l" and max(h, v) > 2.0 * MAX_VIEW_COORDINATE:
+            return (f"illegal {'horizontal' if h > v else 'vertical'} view size {'-vh' if h > v else '-vv'} "
+                    f"{max(h, v):g} m for a parallel view (beyond {2.0 * MAX_VIEW_COORDINATE:g} m)")
         return None
 
     @cached_property

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from lbl_illum import InputError, IrradianceCache, Options, load_scene, read_points
-from lbl_illum.cache import CACHE_FORMAT_VERSION, CacheData, merge_cache_data, read_cache_file, record_settings
+from lbl_illum.cache import (CACHE_FORMAT_VERSION, CacheData, merge_cache_data, read_cache_file, record_settings,
+                              write_cache_file)
 from lbl_illum.integrator import Integrator
 
 from conftest import EXAMPLES, ROOT
@@ -154,6 +155,75 @@ def test_damaged_or_edited_file_is_refused_in_one_line(saved, tmp_path, damage):
     message = str(info.value)
     assert "\n" not in message and message.startswith("bad.lblcache: ")
     assert any(word in message for word in ("damaged", "truncated", "not an lbl_illum cache"))
+
+
+def _edited(values, name, row, change):
+    """A copy of ``values`` with one record's entry of array ``name`` changed."""
+    arr = values[name].copy()
+    change(arr, row)
+    return {**values, name: arr}
+
+
+def _scale_normal(s):
+    def change(arr, row):
+        arr[row] *= s
+    return change
+
+
+def _set(index, value):
+    def change(arr, row):
+        arr[(row, *index)] = value
+    return change
+
+
+#: (case, array of level 1, change of one record, message): physically impossible records
+#: that a correct checksum does not make acceptable.
+IMPOSSIBLE_RECORDS = [
+    ("normal too short", "N", _scale_normal(0.99), r"L1_N: record 3 has a normal of length 0\.99, not a unit vector"),
+    ("normal too long", "N", _scale_normal(1.002), r"L1_N: record 3 has a normal of length 1\.002"),
+    ("normal zero", "N", _scale_normal(0.0), r"L1_N: record 3 has a normal of length 0,"),
+    ("normal NaN", "N", _set((1,), np.nan), r"array L1_N holds non-finite numbers"),
+    ("irradiance negative", "E", _set((2,), -1e-3), r"L1_E: record 3 has a negative irradiance -0\.001 lux"),
+    ("irradiance infinite", "E", _set((0,), np.inf), r"array L1_E holds non-finite numbers"),
+    ("irradiance NaN", "E", _set((0,), np.nan), r"array L1_E holds non-finite numbers"),
+    ("radius zero", "R", _set((), 0.0), r"array L1_R holds radii <= 0"),
+    ("radius negative", "R", _set((), -0.5), r"array L1_R holds radii <= 0"),
+    ("radius infinite", "R", _set((), np.inf), r"array L1_R holds non-finite numbers"),
+    ("position NaN", "P", _set((2,), np.nan), r"array L1_P holds non-finite numbers"),
+    ("position infinite", "P", _set((0,), -np.inf), r"array L1_P holds non-finite numbers"),
+    ("rotational gradient NaN", "Gr", _set((1, 2), np.nan), r"array L1_Gr holds non-finite numbers"),
+    ("translational gradient infinite", "Gt", _set((0, 0), np.inf), r"array L1_Gt holds non-finite numbers"),
+]
+
+
+@pytest.mark.parametrize("case, name, change, message", IMPOSSIBLE_RECORDS, ids=[c[0] for c in IMPOSSIBLE_RECORDS])
+def test_records_no_evaluation_gives_are_refused_despite_a_correct_checksum(saved, tmp_path, case, name, change,
+                                                                            message):
+    """One record of level 1 edited and the file re-written by the module's own writer (so
+    the checksum is right): the loader refuses it, naming the file, the array and the record."""
+    path, integ = saved
+    data = read_cache_file(path)
+    assert data.header["levels"][1]["records"] > 3
+    arrays = _edited(data.arrays, f"L1_{name}", 3, change)
+    bad = tmp_path / "edited.lblcache"
+    write_cache_file(bad, CacheData(data.header, arrays))
+    with pytest.raises(InputError, match=r"^edited.lblcache: damaged cache file \(.*" + message) as info:
+        IrradianceCache.load(bad, integ.fingerprint)
+    assert "\n" not in str(info.value)
+    # the same file with the record as written loads: only the edit is refused
+    write_cache_file(bad, CacheData(data.header, data.arrays))
+    assert IrradianceCache.load(bad, integ.fingerprint).record_counts == integ.cache.record_counts
+
+
+def test_written_records_have_unit_normals_and_non_negative_irradiance(saved):
+    """What the checks demand holds, with room to spare, for what a run writes."""
+    path, _ = saved
+    data = read_cache_file(path)
+    for k in range(len(data.header["levels"])):
+        level = data.level(k)
+        if len(level["P"]):
+            length = np.linalg.norm(level["N"].astype(np.float64), axis=1)
+            assert np.all(np.abs(length - 1) < 1e-6) and np.all(level["E"] >= 0)
 
 
 def test_file_of_another_version_is_refused(saved, tmp_path):

@@ -4,6 +4,7 @@ import json
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -174,6 +175,59 @@ def test_unknown_preset_and_study_one_line(sphere_job, capsys):
     assert not (tmp / "r.csv").exists()
     code, _, err = run(["validate", "nonsense", "--report", tmp], capsys)
     assert code == 2 and "invalid choice: 'nonsense'" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.fixture
+def no_radiance(monkeypatch):
+    """Radiance made unavailable as on a machine without it: no pyradiance package and no
+    Radiance program on the PATH."""
+    import importlib.util
+
+    from lbl_illum.radiance import radiance_programs
+
+    real_find_spec, real_which = importlib.util.find_spec, shutil.which
+    programs = {"oconv", "rtrace", "rad", "obj2mesh", "gensky", "getinfo", "lookamb", "rcalc", "rpict"}
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a, **k: None if name == "pyradiance" else real_find_spec(name, *a, **k))
+    monkeypatch.setattr(shutil, "which",
+                        lambda name, *a, **k: None if name in programs else real_which(name, *a, **k))
+    assert radiance_programs() is None
+
+
+def test_validate_all_skips_the_studies_that_need_radiance_when_it_is_missing(tmp_path, capsys, monkeypatch,
+                                                                               no_radiance):
+    """Each study with an ``unavailable()`` reason is skipped with a line saying why; the
+    others run (here a stand-in writes their report); the summary counts both."""
+    pytest.importorskip("matplotlib")
+    from lbl_illum.cli import _studies
+
+    studies = _studies()
+    ran = []
+
+    def fake_run(name, ctx, report_dir, command_dir=None):
+        ran.append(name)
+        folder = Path(report_dir) / name
+        folder.mkdir(parents=True)
+        (folder / "report.md").write_text("# stand-in\n")
+        return folder
+
+    monkeypatch.setattr(studies, "run_study", fake_run)
+    skipped = [name for name in studies.STUDIES if studies.unavailable(name) is not None]
+    assert "office-daylight" in skipped and "sphere-plane" not in skipped     # sphere-plane runs without it
+    code, _, err = run(["validate", "all", "--quick", "--report", tmp_path], capsys)
+    assert code == 0, err
+    assert ran == [name for name in studies.STUDIES if name not in skipped]
+    lines = err.splitlines()
+    assert "lbl-illum: validate office-daylight: skipped: needs Radiance's oconv and rtrace (pip install pyradiance)" \
+        in lines
+    assert not (tmp_path / "office-daylight").exists()
+    assert lines[-1].startswith(f"lbl-illum: validate all (quick): {len(ran)} reports written, {len(skipped)} "
+                                f"skipped ({', '.join(skipped)}) in ")
+    # one study asked for by name cannot run: one line, exit 2, nothing written
+    code, _, err = run(["validate", "office-daylight", "--quick", "--report", tmp_path / "one"], capsys)
+    assert code == 2 and err.strip() == ("lbl-illum: error: validate office-daylight: cannot run here: needs "
+                                         "Radiance's oconv and rtrace (pip install pyradiance)")
+    assert not (tmp_path / "one").exists() and ran.count("office-daylight") == 0
 
 
 def test_help_lists_presets_and_studies(capsys):

@@ -89,13 +89,34 @@ def refused(folder, capsys, argv, expect: str) -> str:
 
 
 def prepare(folder, scene=GOOD, points=GOOD_POINTS, files=None):
-    """scene.toml, p.pts, the sentinel outputs and any extra files (str or bytes)."""
+    """scene.toml, p.pts, the sentinel outputs and any extra files (str, bytes, or a
+    function that writes the file at the path it is given)."""
     for name, content in {"scene.toml": scene, "p.pts": points, **SENTINELS, **(files or {})}.items():
         if content is None:
             continue
         path = folder / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        (path.write_bytes if isinstance(content, bytes) else path.write_text)(content)
+        if callable(content):
+            content(path)
+        else:
+            (path.write_bytes if isinstance(content, bytes) else path.write_text)(content)
+
+
+def cache_file(**edit):
+    """A function writing a one-record cache file with the module's own writer (so its
+    checksum is right) whose arrays ``edit`` changes: a file no run wrote."""
+    from lbl_illum.cache import CACHE_FORMAT, CacheData, write_cache_file
+
+    def write(path):
+        arrays = {"L0_P": np.zeros((1, 3)), "L0_N": np.array([[0, 0, 1]], np.float32),
+                  "L0_E": np.full((1, 3), 100, np.float32), "L0_R": np.ones(1, np.float32),
+                  "L0_Gr": np.zeros((1, 3, 3), np.float32), "L0_Gt": np.zeros((1, 3, 3), np.float32)}
+        arrays.update({f"L0_{k}": np.asarray(v, arrays[f"L0_{k}"].dtype) for k, v in edit.items()})
+        header = {"format": CACHE_FORMAT, "fingerprint": "0" * 64, "settings": None, "domains": "round",
+                  "center": [0, 0, 0], "half": 1.0, "levels": [{"accuracy": 0.2, "records": 1, "center": [0, 0, 0],
+                                                               "half": 1.0}]}
+        write_cache_file(path, CacheData(header, arrays))
+    return write
 
 
 def illuminance_args(folder, *extra):
@@ -126,6 +147,20 @@ CATALOGUE = [
      {"room.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"}, [], r"room.obj: .*(vertex|index)"),
     ("cache file not a cache", GOOD, GOOD_POINTS, {"c.lblcache": "not a cache\n"}, [],
      r"c.lblcache: not an lbl_illum cache file"),
+    # cache files whose checksum is right but whose records no evaluation gives
+    ("cache record normal not unit length", GOOD, GOOD_POINTS, {"c.lblcache": cache_file(N=[[0, 0, 0.9]])}, [],
+     r"c.lblcache: damaged cache file \(array L0_N: record 0 has a normal of length 0.9, not a unit vector"),
+    ("cache record irradiance negative", GOOD, GOOD_POINTS, {"c.lblcache": cache_file(E=[[10, -1, 10]])}, [],
+     r"c.lblcache: damaged cache file \(array L0_E: record 0 has a negative irradiance -1 lux"),
+    ("cache record irradiance NaN", GOOD, GOOD_POINTS, {"c.lblcache": cache_file(E=[[10, np.nan, 10]])}, [],
+     r"c.lblcache: damaged cache file \(array L0_E holds non-finite numbers\)$"),
+    ("cache record radius zero", GOOD, GOOD_POINTS, {"c.lblcache": cache_file(R=[0])}, [],
+     r"c.lblcache: damaged cache file \(array L0_R holds radii <= 0\)$"),
+    ("cache record position infinite", GOOD, GOOD_POINTS, {"c.lblcache": cache_file(P=[[0, np.inf, 0]])}, [],
+     r"c.lblcache: damaged cache file \(array L0_P holds non-finite numbers\)$"),
+    ("cache record gradient NaN", GOOD, GOOD_POINTS,
+     {"c.lblcache": cache_file(Gt=np.full((1, 3, 3), np.nan))}, [],
+     r"c.lblcache: damaged cache file \(array L0_Gt holds non-finite numbers\)$"),
     # TOML syntax
     ("TOML syntax error", edit("reflectance = 0.5", "reflectance = = 0.5"), GOOD_POINTS, {}, [],
      r"scene.toml: line 12, column 15: "),
@@ -149,7 +184,7 @@ CATALOGUE = [
     ("unknown sun key", add("[sun]\naltitude = 40\nazimut = 180\n"), GOOD_POINTS, {}, [],
      r"\[sun\]: unknown key 'azimut' \(did you mean 'azimuth'\?\)$"),
     ("unknown material type", edit('type = "diffuse"', 'type = "difuse"'), GOOD_POINTS, {}, [],
-     r"\[materials.floor\]: 'type' must be one of diffuse, glass, mirror, light, got 'difuse' "
+     r"\[materials.floor\]: 'type' must be one of diffuse, glass, mirror, (plastic, )?light, got 'difuse' "
      r"\(did you mean 'diffuse'\?\)$"),
     ("unknown shape", edit('shape = "rectangle"', 'shape = "rectangel"'), GOOD_POINTS, {}, [],
      r"geometry\[0\]: unknown shape 'rectangel' \(did you mean 'rectangle'\?\)$"),
@@ -221,7 +256,7 @@ CATALOGUE = [
     ("material used but not defined", edit('material = "floor"', 'material = "flor"'), GOOD_POINTS, {}, [],
      r"geometry\[0\]: unknown material 'flor' \(did you mean 'floor'\?\)$"),
     ("material missing its type", edit('type = "diffuse"\n', ""), GOOD_POINTS, {}, [],
-     r"\[materials.floor\]: missing key 'type' \(one of diffuse, glass, mirror, light\)$"),
+     r"\[materials.floor\]: missing key 'type' \(one of diffuse, glass, mirror, (plastic, )?light\)$"),
     # .pts files
     ("points: malformed line", GOOD, "0.5 0.5 0.1 0 0 1\n0.5 x 0.1 0 0 1\n", {}, [],
      r"p.pts: line 2: not a number: 'x'$"),
@@ -274,7 +309,43 @@ CATALOGUE = [
                                             'type = "perez"\ndiffuse_horizontal_illuminance = 1e300\n'
                                             'direct_normal_illuminance = 0')
      + "[sun]\naltitude = 40\nazimuth = 180\n", GOOD_POINTS, {}, [],
-     r"scene.toml: \[sky\]: a value is too large for the sky model \(overflow\)$"),
+     r"scene.toml: \[sky\]: 'diffuse_horizontal_illuminance' 1e\+300 lux is more than reaches the top of the "
+     r"atmosphere \(138014 lux at the Sun's nearest\)$"),
+    ("Perez direct normal irradiance above the solar constant",
+     edit('type = "uniform"\nhorizontal_illuminance = 10000',
+          'type = "perez"\ndirect_normal_irradiance = 1500\ndiffuse_horizontal_irradiance = 100')
+     + "[sun]\naltitude = 40\nazimuth = 180\n", GOOD_POINTS, {}, [],
+     r"scene.toml: \[sky\]: 'direct_normal_irradiance' 1500 W/m2 is more than reaches the top of the atmosphere"),
+    ("Perez diffuse irradiance NaN", edit('type = "uniform"\nhorizontal_illuminance = 10000',
+                                         'type = "perez"\ndirect_normal_irradiance = 500\n'
+                                         'diffuse_horizontal_irradiance = nan')
+     + "[sun]\naltitude = 40\nazimuth = 180\n", GOOD_POINTS, {}, [],
+     r"scene.toml: \[sky\]: 'diffuse_horizontal_irradiance' must be finite, got nan$"),
+    ("sky zenith luminance too large for a float", edit("horizontal_illuminance = 10000", "zenith_luminance = 1e308"),
+     GOOD_POINTS, {}, [], r"scene.toml: \[sky\]: 'zenith_luminance' 1e\+308 is too large"),
+    ("sky horizontal illuminance negative", edit("horizontal_illuminance = 10000", "horizontal_illuminance = -1"),
+     GOOD_POINTS, {}, [], r"scene.toml: \[sky\]: 'horizontal_illuminance' must be >= 0, got -1$"),
+    ("sun azimuth infinite", add("[sun]\naltitude = 40\nazimuth = -inf\n"), GOOD_POINTS, {}, [],
+     r"scene.toml: \[sun\]: 'azimuth' must be finite, got -inf$"),
+    # [views.NAME] tables (read with the scene by every command)
+    ("view wider than a perspective can be",
+     add('[views.desk]\nposition = [0.5, 0.5, 1]\ndirection = [0, 1, 0]\nhorizontal = 185\n'), GOOD_POINTS, {}, [],
+     r"scene.toml: \[views.desk\]: illegal horizontal view size -vh 185 for a perspective view \(below 180 degrees\)$"),
+    ("view direction parallel to up",
+     add('[views.desk]\nposition = [0.5, 0.5, 1]\ndirection = [0, 0, -1]\n'), GOOD_POINTS, {}, [],
+     r"scene.toml: \[views.desk\]: view up \(-vu\) parallel to view direction \(-vd\)$"),
+    ("view direction zero",
+     add('[views.desk]\nposition = [0.5, 0.5, 1]\ndirection = [0, 0, 0]\n'), GOOD_POINTS, {}, [],
+     r"scene.toml: \[views.desk\]: zero view direction \(-vd\)$"),
+    ("view fore clipping negative",
+     add('[views.desk]\nposition = [0.5, 0.5, 1]\ndirection = [0, 1, 0]\nfore = -1\n'), GOOD_POINTS, {}, [],
+     r"scene.toml: \[views.desk\]: 'fore' must be >= 0, got -1$"),
+    ("view fisheye beyond 360 degrees",
+     add('[views.fish]\ntype = "fisheye"\nposition = [0.5, 0.5, 1]\ndirection = [0, 0, 1]\nup = [0, 1, 0]\n'
+         'horizontal = 400\n'), GOOD_POINTS, {}, [],
+     r"\[views.fish\]: illegal horizontal view size -vh 400 for an angular fisheye view \(at most 360 degrees\)$"),
+    ("view position NaN", add('[views.desk]\nposition = [0.5, nan, 1]\ndirection = [0, 1, 0]\n'), GOOD_POINTS, {},
+     [], r"scene.toml: \[views.desk\]: 'position' must be finite, got nan$"),
     # outputs
     ("output of an unknown format", GOOD, GOOD_POINTS, {}, ["-o", "out.xlsx"], r"out.xlsx: output must end in .csv or .txt$"),
     ("output folder missing", GOOD, GOOD_POINTS, {}, ["-o", "nowhere/out.csv"], r"folder nowhere does not exist$"),
@@ -406,6 +477,49 @@ def test_every_command_leaves_its_outputs_alone(tmp_path, capsys, command, fault
         (tmp_path / "out.csv").write_text("x,y,z,nx,ny,nz,illuminance\n0,0,nope,0,0,1,1\n")
         expect = r"out.csv: line 2: column 'z': not a number$"
     refused(tmp_path, capsys, argv, expect)
+
+
+# ---------------------------------------------------------------------------
+# render: image sizes refused before any work
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("size, expect", [
+    (["-x", "100000", "-y", "100000"], r"error: -x 100000 is more than the 16384 pixels allowed per side$"),
+    (["-x", "512", "-y", "16385"], r"error: -y 16385 is more than the 16384 pixels allowed per side$"),
+    (["-x", "0"], r"error: -x must be a positive whole number, got 0$"),
+    (["-y=-3"], r"error: -y must be a positive whole number, got -3$"),
+    (["--pixel-samples", "0"], r"error: --pixel-samples must be a positive whole number, got 0$"),
+    (["-x", "4096", "-y", "4096"], r"error: -x 4096 -y 4096 with 1 pixel sample is 16,777,216 camera rays, traced in "
+                                   r"one batch: about 16 GiB of memory, more than the 1 GiB available; render a "
+                                   r"smaller image$"),
+    (["-x", "1024", "-y", "1024", "--pixel-samples", "2"], r"-x 1024 -y 1024 with 2 pixel samples is 2,097,152 "
+                                                           r"camera rays.*about 2 GiB of memory"),
+])
+def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch, size, expect):
+    """With 1 GiB said to be available: nothing is read, rendered or written."""
+    import lbl_illum.cli as cli
+    import lbl_illum.render as render
+
+    monkeypatch.setattr(cli, "_available_memory", lambda: 2 ** 30)
+    monkeypatch.setattr(render, "render_command", lambda args: pytest.fail("render started"))
+    prepare(tmp_path, BAD_SCENE, files=OUTPUTS)          # not even the scene is read
+    argv = ["render", tmp_path / "scene.toml", VIEW, "-o", tmp_path / "image.hdr", *size]
+    refused(tmp_path, capsys, argv, expect)
+
+
+def test_render_sizes_that_fit_go_ahead(tmp_path, capsys, monkeypatch):
+    import lbl_illum.cli as cli
+    import lbl_illum.render as render
+
+    started = []
+    monkeypatch.setattr(cli, "_available_memory", lambda: 2 ** 30)
+    monkeypatch.setattr(render, "render_command", lambda args: started.append((args.x, args.y)) or 0)
+    assert main(["render", "s.toml", VIEW, "-o", str(tmp_path / "i.hdr"), "-x", "1024", "-y", "1024"]) == 0
+    monkeypatch.setattr(cli, "_available_memory", lambda: None)         # unknown: only the side limit
+    assert main(["render", "s.toml", VIEW, "-o", str(tmp_path / "i.hdr"), "-x", "16384", "-y", "16384"]) == 0
+    assert started == [(1024, 1024), (16384, 16384)]
+    have = cli._available_memory()
+    assert have is None or have > 0
 
 
 # ---------------------------------------------------------------------------

@@ -476,11 +476,14 @@ def cache_files(tmp_path_factory):
 
 
 def _check_cache(cache: IrradianceCache) -> None:
-    """A loaded cache answers lookups at and near its records with finite values."""
+    """A loaded cache holds records an evaluation could give (finite positions, unit normals,
+    irradiance ≥ 0, radii > 0) and answers lookups at and near them with finite values."""
     for level in cache.levels:
         if level.count:
             P = np.asarray(level.P[: level.count], np.float64)
             N = np.asarray(level.N[: level.count], np.float64)
+            assert np.isfinite(P).all() and np.all(np.abs(np.linalg.norm(N, axis=1) - 1) <= 1e-3)
+            assert np.all(level.E[: level.count] >= 0) and np.all(level.R[: level.count] > 0)
             for gradients in (False, True):
                 E, w, n = level.lookup(P + 0.01, N, gradients=gradients)
                 assert np.isfinite(E).all() and np.isfinite(w).all() and np.all(n >= 0)
@@ -530,7 +533,8 @@ def test_cache_loader_on_consistent_but_wrong_contents(cache_files, which, data)
     _, header, arrays = files[which]
     header, arrays = copy.deepcopy(header), {k: v.copy() for k, v in arrays.items()}
     for _ in range(data.draw(st.integers(1, 3))):
-        op = data.draw(st.sampled_from(["header", "entry", "truncate", "dtype", "flatten", "drop", "extra"]))
+        op = data.draw(st.sampled_from(["header", "entry", "record", "truncate", "dtype", "flatten", "drop",
+                                        "extra"]))
         if op == "header":
             paths = [p for p in _paths(header) if p[0] != "checksum"]
             path = data.draw(st.sampled_from(paths))
@@ -545,7 +549,14 @@ def test_cache_loader_on_consistent_but_wrong_contents(cache_files, which, data)
         elif arrays:
             name = data.draw(st.sampled_from(sorted(arrays)))
             arr = arrays[name]
-            if op == "entry" and arr.size:
+            if op == "record" and arr.ndim == 2 and arr.dtype.kind == "f" and len(arr):
+                # one record's normal scaled, or one irradiance channel made negative
+                row = data.draw(st.integers(0, len(arr) - 1))
+                if name.endswith("_N"):
+                    arr[row] *= data.draw(st.sampled_from([0.0, 0.5, 0.998, 1.002, 2.0, -1.0]))
+                else:
+                    arr[row, data.draw(st.integers(0, 2))] = data.draw(st.sampled_from([-1e-6, -1.0, -1e30]))
+            elif op == "entry" and arr.size:
                 values = [np.nan, np.inf, -1.0, 0.0, 1e30, -1e30, 1e-30] if arr.dtype.kind == "f" else [0, 1, 2 ** 32 - 1]
                 arr.flat[data.draw(st.integers(0, arr.size - 1))] = data.draw(st.sampled_from(values))
             elif op == "truncate":

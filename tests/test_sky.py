@@ -201,6 +201,98 @@ def test_sun_dependent_sky_without_sun_is_an_error():
         sky_from_table({"type": "perez", "direct_normal_illuminance": 1, "diffuse_horizontal_illuminance": 1}, "w")
 
 
+NAN, INF = float("nan"), float("inf")
+PEREZ_W = {"type": "perez", "direct_normal_irradiance": 600, "diffuse_horizontal_irradiance": 120}
+PEREZ_LUX = {"type": "perez", "direct_normal_illuminance": 60000, "diffuse_horizontal_illuminance": 15000}
+
+
+@pytest.mark.parametrize("table, message", [
+    # non-finite values, each refused naming its key
+    ({"type": "cie-general", "sky_type": NAN}, r"'sky_type' must be a whole number 1…15, got nan$"),
+    ({"type": "cie-general", "sky_type": -INF}, r"'sky_type' must be a whole number 1…15, got -inf$"),
+    ({"type": "cie-overcast", "horizontal_illuminance": NAN}, r"'horizontal_illuminance' must be finite, got nan$"),
+    ({"type": "uniform", "zenith_luminance": INF}, r"'zenith_luminance' must be finite, got inf$"),
+    ({"type": "cie-overcast", "ground_reflectance": NAN}, r"'ground_reflectance' must be finite"),
+    ({**PEREZ_W, "direct_normal_irradiance": NAN}, r"'direct_normal_irradiance' must be finite, got nan$"),
+    ({**PEREZ_W, "diffuse_horizontal_irradiance": INF}, r"'diffuse_horizontal_irradiance' must be finite"),
+    ({**PEREZ_LUX, "diffuse_horizontal_illuminance": -INF}, r"'diffuse_horizontal_illuminance' must be finite"),
+    ({**PEREZ_W, "dew_point": NAN}, r"'dew_point' must be finite, got nan$"),
+    # out of range
+    ({"type": "cie-overcast", "horizontal_illuminance": -1}, r"'horizontal_illuminance' must be >= 0, got -1$"),
+    ({"type": "cie-overcast", "ground_reflectance": 1.5}, r"'ground_reflectance' must be <= 1, got 1.5$"),
+    ({"type": "cie-general", "sky_type": 0}, r"'sky_type' must be a whole number 1…15, got 0$"),
+    ({**PEREZ_W, "direct_normal_irradiance": -5}, r"'direct_normal_irradiance' must be >= 0, got -5$"),
+    ({**PEREZ_W, "dew_point": 60}, r"'dew_point' must be <= 40, got 60$"),
+    # more than reaches the top of the atmosphere (1367 W/m2 and 133 334 lx times 1.0351)
+    ({**PEREZ_W, "direct_normal_irradiance": 1416},
+     r"'direct_normal_irradiance' 1416 W/m2 is more than reaches the top of the atmosphere \(1414.98 W/m2 at the "
+     r"Sun's nearest\)$"),
+    ({**PEREZ_W, "diffuse_horizontal_irradiance": 2000}, r"'diffuse_horizontal_irradiance' 2000 W/m2 is more than"),
+    ({**PEREZ_LUX, "direct_normal_illuminance": 140000}, r"'direct_normal_illuminance' 140000 lux is more than "
+                                                         r"reaches the top of the atmosphere \(138014 lux"),
+    ({**PEREZ_LUX, "diffuse_horizontal_illuminance": 1e300}, r"'diffuse_horizontal_illuminance' 1e\+300 lux is more"),
+    # values the model cannot take, refused naming the keys
+    ({**PEREZ_W, "diffuse_horizontal_irradiance": 5e-324},
+     r"clearness must be a finite number, got inf; from 'direct_normal_irradiance' 600 and "
+     r"'diffuse_horizontal_irradiance' 4.94066e-324$"),
+    ({**PEREZ_LUX, "diffuse_horizontal_illuminance": 5e-324},
+     r"no Perez sky \(ZeroDivisionError\); from 'direct_normal_illuminance' 60000"),
+    # finite values whose sky would not be
+    ({"type": "uniform", "zenith_luminance": 1e308}, r"'zenith_luminance' 1e\+308 is too large"),
+    ({"type": "cie-clear", "zenith_luminance": 1e308}, r"'zenith_luminance' 1e\+308 is too large"),
+])
+def test_sky_values_must_be_finite_and_in_range(table, message):
+    with pytest.raises(InputError, match=r"^s.toml: \[sky\]: .*" + message) as exc:
+        sky_from_table(table, "s.toml: [sky]", sun_position=(30, 180))
+    assert "\n" not in str(exc.value)
+
+
+def test_perez_values_up_to_the_extraterrestrial_ones_are_accepted():
+    """The bounds are those of sunlight above the atmosphere, not tighter: 1414 W/m² and
+    138 000 lx direct normal (a clear sky at high altitude reaches about 1100 W/m²) pass."""
+    from lbl_illum.sky import MAX_EXTRATERRESTRIAL_ILLUMINANCE, MAX_EXTRATERRESTRIAL_IRRADIANCE
+
+    assert MAX_EXTRATERRESTRIAL_IRRADIANCE == pytest.approx(1367 * 1.0351)
+    assert MAX_EXTRATERRESTRIAL_ILLUMINANCE == pytest.approx(133334 * 1.0351)
+    sky = sky_from_table({**PEREZ_W, "direct_normal_irradiance": 1414}, "w", sun_position=(60, 180))
+    assert sky.direct_normal_illuminance > 0 and sky.horizontal_illuminance > 0
+    sky = sky_from_table({**PEREZ_LUX, "direct_normal_illuminance": 138000}, "w", sun_position=(60, 180))
+    assert sky.direct_normal_illuminance == pytest.approx(138000, rel=1e-6)
+
+
+@pytest.mark.parametrize("position, message", [
+    ((NAN, 180), r"the sun's altitude and azimuth must be finite, got nan, 180$"),
+    ((30, INF), r"the sun's altitude and azimuth must be finite, got 30, inf$"),
+    ((91, 0), r"the sun's altitude must be within -90 and 90 degrees, got 91$"),
+    (("high", 0), r"the sun's position must be \(altitude, azimuth\) in degrees"),
+])
+def test_sky_refuses_a_sun_position_that_is_not_one(position, message):
+    with pytest.raises(InputError, match=r"^s.toml: \[sky\]: " + message):
+        sky_from_table({"type": "cie-clear"}, "s.toml: [sky]", sun_position=position)
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: UniformSky(horizontal_illuminance=NAN), r"horizontal_illuminance must be a finite number, got nan"),
+    (lambda: CIEOvercastSky(horizontal_illuminance=-1.0), r"horizontal_illuminance must be >= 0, got -1"),
+    (lambda: UniformSky(ground_reflectance=1.2), r"ground_reflectance must be within 0 and 1, got 1.2"),
+    (lambda: UniformSky(sun_horizontal_illuminance=INF), r"sun_horizontal_illuminance must be a finite number"),
+    (lambda: CIEGeneralSky(horizontal_illuminance=1e4, sky_type=12, sun_altitude=NAN, sun_azimuth=0.0),
+     r"sun_altitude must be a finite number, got nan"),
+    (lambda: CIEGeneralSky(horizontal_illuminance=1e4, sky_type=12, sun_altitude=30.0, sun_azimuth=INF),
+     r"sun_azimuth must be a finite number, got inf"),
+    (lambda: PerezSky(horizontal_illuminance=1e4, clearness=INF), r"clearness must be a finite number, got inf"),
+    (lambda: PerezSky(horizontal_illuminance=1e4, clearness=0.5), r"clearness must be >= 1, got 0.5"),
+    (lambda: PerezSky(horizontal_illuminance=1e4, brightness=NAN), r"brightness must be a finite number, got nan"),
+    (lambda: PerezSky(horizontal_illuminance=1e4, sun_altitude=120.0), r"sun_altitude must be within -90 and 90"),
+    (lambda: PerezSky(horizontal_illuminance=1e4, direct_normal_illuminance=-1.0),
+     r"direct_normal_illuminance must be >= 0, got -1"),
+])
+def test_sky_objects_refuse_values_out_of_range(make, message):
+    """The models made directly (library use, weather files) check their fields too."""
+    with pytest.raises(ValueError, match=message):
+        make()
+
+
 # Radiance 6.0a ``gendaylit`` (version 2.5, 2018/04/18), the reference implementation of the Perez
 # (1993) sky: ``gendaylit -ang ALT 0 -P EPSILON DELTA`` prints a…e as the 3rd–7th real arguments
 # of ``skyfunc``.  One case per clearness bin (two in bin 2: the Δ ≥ 0.2 floor of bins 2–5).

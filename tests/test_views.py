@@ -101,6 +101,66 @@ def test_bad_strings(text, words):
     assert message.startswith("--view: ") and words in message and "\n" not in message
 
 
+@pytest.mark.parametrize("text, message", [
+    # each refusal names the option, with the limit where there is one
+    ("-vtv -vh 180", r"illegal horizontal view size -vh 180 for a perspective view \(below 180 degrees\)$"),
+    ("-vtv -vv 179.99999999", r"illegal vertical view size -vv 180 for a perspective view \(below 180 degrees\)$"),
+    ("-vtv -vh -10", r"illegal horizontal view size -vh -10$"),
+    ("-vtv -vv 0", r"illegal vertical view size -vv 0$"),
+    ("-vta -vh 360.5", r"illegal horizontal view size -vh 360.5 for an angular fisheye view \(at most 360 degrees\)$"),
+    ("-vth -vh 181", r"-vh 181 for a hemispherical fisheye view \(at most 180 degrees\)$"),
+    ("-vtc -vh 361", r"-vh 361 for a cylindrical panorama view \(at most 360 degrees\)$"),
+    ("-vtc -vv 180", r"-vv 180 for a cylindrical panorama view \(below 180 degrees\)$"),
+    ("-vtl -vh 3e9 -vv 1", r"-vh 3e\+09 m for a parallel view \(beyond 2e\+09 m\)$"),
+    ("-vtv -vo -1", r"illegal fore/aft clipping distances -vo -1 -va 0$"),
+    ("-vtv -va -2", r"illegal fore/aft clipping distances -vo 0 -va -2$"),
+    ("-vtv -vo 2e9", r"-vo \(fore\) 2e\+09 m is beyond 1e\+09 m$"),
+    ("-vtv -vd 0 0 0", r"zero view direction \(-vd\)$"),
+    ("-vtv -vu 0 0 0", r"zero view up vector \(-vu\)$"),
+    ("-vtv -vd 0 0 -2 -vu 0 0 5", r"view up \(-vu\) parallel to view direction \(-vd\)$"),
+    ("-vtv -vd 1 0 1e-9 -vu 1e3 0 0", r"view up \(-vu\) parallel to view direction \(-vd\)$"),
+    ("-vtv -vp 2e9 0 0", r"-vp \(position\) 2e\+09 m is beyond ±1e\+09 m$"),
+    ("-vtv -vs 1e7", r"-vs \(shift\) 1e\+07 image widths is beyond ±1e\+06$"),
+    ("-vtv -vl -1e300", r"-vl \(lift\) -1e\+300 image heights is beyond ±1e\+06$"),
+    ("-vtv -vd 0 inf 0", r"-vd needs finite numbers, got 'inf'$"),
+    ("-vtv -va nan", r"-va needs finite numbers, got 'nan'$"),
+])
+def test_view_values_out_of_range_are_refused_naming_the_option(text, message):
+    with pytest.raises(InputError, match=r"^--view: .*" + message) as err:
+        view_from_string(text, where="--view")
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("position", (0.0, float("nan"), 1.0), r"^view: -vp \(position\) must be finite, got 0 nan 1$"),
+    ("direction", (float("inf"), 0.0, 0.0), r"^view: -vd \(direction\) must be finite, got inf 0 0$"),
+    ("up", (0.0, 0.0, float("-inf")), r"^view: -vu \(up\) must be finite"),
+    ("horizontal", float("nan"), r"^view: -vh \(horizontal\) must be finite, got nan$"),
+    ("fore", float("inf"), r"^view: -vo \(fore\) must be finite, got inf$"),
+    ("shift", float("nan"), r"^view: -vs \(shift\) must be finite"),
+])
+def test_view_objects_name_the_field_that_is_not_finite(field, value, message):
+    with pytest.raises(InputError, match=message):
+        View(**{field: value})
+
+
+@pytest.mark.parametrize("text", ["-vtv -vd 1e200 0 0", "-vtv -vd 1e-200 2e-200 0 -vu 0 0 1e-300",
+                                  "-vtv -vd 1e308 1e308 1e308", "-vtv -vh 179.9999 -vs 1e6",
+                                  "-vtc -vv 179.9999 -vl 1e6", "-vtl -vh 2e9 -vv 2e9 -vs 1e6 -vl -1e6",
+                                  "-vta -vh 360 -vv 360 -vs 0.3"])
+def test_extreme_legal_views_give_finite_unit_rays(text):
+    """Vectors of any finite, non-zero size are directions (Radiance's would overflow or
+    underflow |v|² at 1e±200), and offsets up to the limits keep every ray finite."""
+    view = view_from_string(text)
+    with np.errstate(all="raise"):
+        origins, directions, valid = view.rays(5, 4)
+    assert np.isfinite(origins).all() and np.isfinite(directions).all()
+    assert np.allclose(np.linalg.norm(directions, axis=1), 1.0)
+    big = view_from_string(text.replace("1e200", "1").replace("1e308 1e308 1e308", "1 1 1")
+                           .replace("1e-200 2e-200 0 -vu 0 0 1e-300", "1 2 0 -vu 0 0 1"))
+    assert np.allclose(view.unit_direction, big.unit_direction, rtol=0, atol=1e-15)
+
+
 def test_rvu_vf_file(tmp_path):
     path = tmp_path / "desk.vf"
     path.write_text("rvu -vtv -vp 2 5.7 1.5 -vd 0 -1 -0.1 -vu 0 0 1 -vh 80 -vv 60 -vo 0 -va 0 -vs 0 -vl 0\n")

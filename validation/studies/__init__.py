@@ -7,7 +7,11 @@ in the repository's ``validation/studies/`` folder and are installed as the pack
 checkout and from an installed copy alike.
 
 A study module has ``TITLE`` and ``run(ctx: StudyContext) -> Report``; ``ctx.quick``
-selects the reduced version the test suite runs.
+selects the reduced version the test suite runs.  A study that needs something not every
+installation has (Radiance's programs, the ``examples/`` folder of a source checkout) also
+has ``unavailable() -> str | None``, saying why it cannot run here; :func:`unavailable`
+asks it, and ``lbl-illum validate all`` skips such a study with that line instead of
+stopping.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from pathlib import Path
 
 from .report import Report, StudyContext, environment
 
-__all__ = ["STUDIES", "run_study", "Report", "StudyContext", "repository_root"]
+__all__ = ["STUDIES", "run_study", "unavailable", "Report", "StudyContext", "repository_root"]
 
 #: study name -> module
 STUDIES = {
@@ -48,6 +52,14 @@ def repository_root() -> Path | None:
         if (candidate / "examples" / "office" / "scene.toml").is_file():
             return candidate
     return None
+
+
+def unavailable(name: str) -> str | None:
+    """Why study ``name`` cannot run here (its module's ``unavailable()``), or None when it
+    can or has no such hook."""
+    module = importlib.import_module(f".{STUDIES[name]}", __name__)
+    hook = getattr(module, "unavailable", None)
+    return hook() if callable(hook) else None
 
 
 def run_study(name: str, ctx: StudyContext, report_dir: str | Path, command_dir: str | None = None) -> Path:
