@@ -17,6 +17,7 @@ import numpy as np
 
 from .errors import InputError, check_keys, get_number
 from .hemisphere import orthonormal_basis
+from .sky import MAX_EXTRATERRESTRIAL_ILLUMINANCE
 from .solar import Site, parse_time, solar_position, to_utc
 
 __all__ = ["Sun", "SUN_SOLID_ANGLE", "sun_from_table", "sun_position_at"]
@@ -110,7 +111,9 @@ def sun_from_table(table: Mapping[str, Any] | None, where: str, site: Site | Non
         alt = get_number(table, "altitude", where, minimum=-90.0, maximum=90.0)
         az = get_number(table, "azimuth", where)
     if "direct_normal_illuminance" in table or default_direct_normal is None:
-        edn = get_number(table, "direct_normal_illuminance", where, minimum=0.0)
+        # no beam at the ground is brighter than the sun above the atmosphere at perihelion
+        edn = get_number(table, "direct_normal_illuminance", where, minimum=0.0,
+                         maximum=MAX_EXTRATERRESTRIAL_ILLUMINANCE)
     else:
         edn = float(default_direct_normal)
     warnings = ()

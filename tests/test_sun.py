@@ -55,11 +55,19 @@ def test_sun_at_night_warns():
     ({"azimuth": 0, "direct_normal_illuminance": 1}, SITE, r"missing key 'altitude' \(or give a 'time'"),
     ({"altitude": 91, "azimuth": 0, "direct_normal_illuminance": 1}, None, r"'altitude' must be <= 90"),
     ({"altitude": 10, "azimuth": 0, "direct_normal_iluminance": 1}, None, r"did you mean 'direct_normal_illuminance'"),
+    # brighter than the sun above the atmosphere at perihelion (133 334 lx × 1.0351)
+    ({"altitude": 10, "azimuth": 0, "direct_normal_illuminance": 1.4e5}, None,
+     r"'direct_normal_illuminance' must be <= 1380\d\d, got 140000"),
 ])
 def test_sun_table_errors(table, site, message):
     with pytest.raises(InputError, match=rf"^s.toml: \[sun\]: .*{message}") as exc:
         sun_from_table(table, "s.toml: [sun]", site)
     assert "\n" not in str(exc.value)
+
+
+def test_brightest_possible_sun_is_accepted():
+    sun = sun_from_table({"altitude": 60, "azimuth": 180, "direct_normal_illuminance": 1.38e5}, "s.toml: [sun]")
+    assert sun.direct_normal_illuminance == 1.38e5
 
 
 def test_default_direct_normal_from_the_sky():
