@@ -58,7 +58,7 @@ from .cache import IrradianceCache, LevelRecords
 from .direct import DirectLight
 from .hemisphere import (cell_counts, cosine_directions, hessian_radii, irradiance_gradients, irradiance_hessian,
                          leak_sectors, limit_gradients, stratified_directions)
-from .materials import DIFFUSE, GLASS, LIGHT, MIRROR, MaterialTable
+from .materials import GLASS, LIGHT, MIRROR, PLASTIC, PLASTIC_BRANCH_LIMIT, MaterialTable, russian_roulette
 from .options import Options
 from .placement import distance_bands, pick_per_cell
 from .photometry import luminance
@@ -179,6 +179,7 @@ def scene_fingerprint(scene: Scene, options: Options) -> str:
         h.update(np.ascontiguousarray(arr).tobytes())
     desc = {
         "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance, m.model, m.panes, m.index)
+                      + ((m.specularity, m.roughness) if m.kind == "plastic" else ())
                       for m in scene.materials],
         "sky": scene.sky.parameters,
         "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,
@@ -261,13 +262,19 @@ class Integrator:
                                               np.full(len(openings), -1, np.int32)),
                                     np.zeros(1, np.int8), np.zeros((1, 3)), threads=self.tracer.threads)
             self._opening_first = len(portal_ids)     # portal index of the first opening triangle
-        #: per material: reflects diffusely (ends a path at a diffuse level), and ρ/π
-        self._diffuse_reflector = (self.materials.kind == DIFFUSE) & (self.materials.reflectance.max(axis=1) > 0.0)
-        self._rho_over_pi = self.materials.reflectance / np.pi
+        #: per material: reflects diffusely (ends a path at a diffuse level: a diffuse
+        #: surface or the diffuse part of plastic), and ρ_d/π
+        self._diffuse_reflector = self.materials.diffuse_reflectance.max(axis=1) > 0.0
+        self._rho_over_pi = self.materials.diffuse_reflectance / np.pi
         used = np.unique(scene.triangles.material)
         specular = np.isin(self.materials.kind[used], (MIRROR, GLASS)) & (self.materials.reflectance[used].max(axis=1) > 0)
-        #: some surface reflects specularly (a mirror, or glass with reflectance)
+        specular |= self.materials.specularity[used] > 0.0
+        #: some surface reflects specularly (a mirror, glass with reflectance, plastic with s > 0)
         self._reflects = bool(specular.any())
+        #: some plastic is hit: its specular branches play Russian roulette
+        self._plastic = bool(np.any(self.materials.kind[used] == PLASTIC))
+        #: some polished plastic's diffuse reflectance depends on the angle of incidence
+        self._plastic_fresnel = bool(np.any(self.materials.plastic_fresnel[used]))
         #: elliptical record domains from the Hessian (``interpolation = "hessian"``)
         self.hessian = self.options.interpolation == "hessian"
         self.fingerprint = scene_fingerprint(scene, self.options)
@@ -393,7 +400,8 @@ class Integrator:
             P, Ng, Ns = self.tracer.surface(o, d, hits, hit)
             mat = self.scene.triangles.material[hits.prim[hit]]
             kind = mats.kind[mat]
-            # diffuse surfaces end the path
+            # diffuse surfaces end the path (plastic: its diffuse part; its specular part
+            # continues below, so a plastic hit is both)
             dif = np.flatnonzero(self._diffuse_reflector[mat])
             if len(dif):
                 out["ray"].append(ray[hit[dif]])
@@ -401,12 +409,14 @@ class Integrator:
                 out["Ns"].append(Ns[dif])
                 out["Ng"].append(Ng[dif])
                 weight = self._rho_over_pi[mat[dif]]
+                if self._plastic_fresnel:           # polished plastic: ρ_d(θ) = (1 − ρ_s(θ)) C
+                    weight = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif])) / np.pi
                 out["weight"].append(weight if unit else through[hit[dif]] * weight)
             lit = np.flatnonzero((kind == LIGHT) & reflected[hit])
             if len(lit):
                 radiance[ray[hit[lit]]] += through[hit[lit]] * mats.luminance[mat[lit]]
-            # specular surfaces continue
-            spec = np.flatnonzero((kind == MIRROR) | (kind == GLASS))
+            # specular surfaces continue (plastic: by reflection, into its lobe if rough)
+            spec = np.flatnonzero(mats.continues[mat])
             if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
                 break
             s_hit = hit[spec]
@@ -419,7 +429,7 @@ class Integrator:
             total = p_t + p_r
             keep = total > 0
             transmit = rng.random(len(spec)) * np.where(keep, total, 1.0) < p_t
-            refl_dir = ds - 2.0 * np.einsum("ij,ij->i", ds, ns)[:, None] * ns
+            refl_dir, rho = mats.reflect(s_mat, ds, ns, rho, rng)
             new_d = np.where(transmit[:, None], ds, refl_dir)
             side = np.where(transmit[:, None], -Ng[spec], Ng[spec])
             safe = np.where(keep, total, 1.0)[:, None]
@@ -427,6 +437,10 @@ class Integrator:
                               rho / np.maximum(p_r, 1e-300)[:, None]) * safe
             new_through = through[s_hit] * factor
             alive = keep & (new_through.max(axis=1) > 0.0)
+            if self._plastic:                       # weak branches from plastic: Russian roulette
+                weak = np.flatnonzero(alive & (mats.kind[s_mat] == PLASTIC))
+                if len(weak):
+                    alive[weak], new_through[weak] = russian_roulette(new_through[weak], rng, PLASTIC_BRANCH_LIMIT)
             if portal_mis is not None and depth == 0 and self.portals is not None:
                 through_portal = np.flatnonzero(transmit & mats.portal[s_mat])
                 if len(through_portal):

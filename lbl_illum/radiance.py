@@ -85,7 +85,8 @@ TWO_SIDED_OFFSET = 1e-5
 #: Light triangles of one material are merged into convex polygons (see
 #: :func:`merge_coplanar`) up to this many; more are written as they are.
 MAX_MERGED_LIGHT_TRIANGLES = 10_000
-#: Radiance's default ambient resolution, used when the record spacing is not known.
+#: rtrace's default ambient resolution, written out when the record spacing is not known
+#: (rpict's default is 64).
 RADIANCE_DEFAULT_AR = 256
 #: Radiance's largest ambient record radius is 64 cube / ar (ambient.c, ``setambres``).
 RADIANCE_MAXARAD_FACTOR = 64.0
@@ -239,10 +240,15 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
       transmittance, ``"brtdfunc"`` every glass with constant (normal-incidence)
       coefficients: both only approximate the glass of another model;
     * ``mirror`` → ``mirror`` with the reflectance RGB;
+    * ``plastic`` → ``plastic`` with the colour RGB, the specularity and the roughness
+      (the same model: :mod:`lbl_illum.materials`);
     * ``light`` → ``light`` with radiance = luminance / 179 per channel.
     """
     if material.kind == "diffuse":
         return f"void plastic {rad_name}\n0\n0\n5 {_rgb(material.reflectance)} 0 0\n"
+    if material.kind == "plastic":
+        return (f"void plastic {rad_name}\n0\n0\n5 {_rgb(material.reflectance)} {_g(material.specularity)} "
+                f"{_g(material.roughness)}\n")
     if material.kind == "mirror":
         return f"void mirror {rad_name}\n0\n0\n3 {_rgb(material.reflectance)}\n"
     if material.kind == "light":
@@ -386,13 +392,16 @@ def ambient_options(options, max_spacing: float | None = None, cube: float | Non
     ``-lw`` small (do not drop the deep bounces), ``-av`` = ambient / (179 π) with
     ``-aw 0`` when a bounce-limit illuminance is set.  ``-ar`` makes Radiance's largest
     record radius, 64 · cube / ar (ambient.c), equal to our ``max_spacing`` [m] when that
-    and the octree's cube size [m] are known; it is left out (Radiance's default 256)
-    otherwise.
+    and the octree's cube size [m] are known; otherwise it is written out as ``-ar 256``
+    (:data:`RADIANCE_DEFAULT_AR`, rtrace's default), because rpict's default (64) differs
+    and the same options serve both.
     """
     opts = ["-ab", str(options.bounces + 1), "-aa", f"{options.accuracy:g}", "-ad", str(options.samples),
             "-as", "0"]
     if max_spacing and cube:
         opts += ["-ar", str(max(1, math.ceil(RADIANCE_MAXARAD_FACTOR * cube / max_spacing)))]
+    else:
+        opts += ["-ar", str(RADIANCE_DEFAULT_AR)]
     opts += ["-lw", f"{LIMIT_WEIGHT:g}"]
     if options.ambient > 0:
         av = to_radiance(options.ambient / math.pi)
@@ -827,7 +836,8 @@ def _readme(scene, ex: RadianceExport, max_spacing, cube, glass) -> str:
     rt = " ".join(ex.rtrace_command())
     ar_note = (f"-ar makes Radiance's largest record radius (64 x cube / ar, cube ~ {cube:.4g} m) equal to our "
                f"max_spacing {max_spacing:.4g} m." if max_spacing else
-               "-ar is left at Radiance's default (256): our max_spacing is automatic and no points were given.")
+               f"-ar is {RADIANCE_DEFAULT_AR} (rtrace's default, written out because rpict's is 64): our "
+               "max_spacing is automatic and no points were given.")
     lines = [
         f"Radiance version of {source}, written by lbl-illum {__version__} (lbl-illum export radiance).",
         "",
@@ -835,7 +845,7 @@ def _readme(scene, ex: RadianceExport, max_spacing, cube, glass) -> str:
         "per RGB channel; illuminance [lux] = 179 x Radiance irradiance [W/m2].",
         "",
         "Files",
-        "  materials.rad  materials (diffuse -> plastic, glass -> " + _glass_note(scene, glass)
+        "  materials.rad  materials (diffuse -> plastic, plastic -> plastic, glass -> " + _glass_note(scene, glass)
         + ", mirror -> mirror, light -> light)",
         "  sky.rad        sky and ground glow (brightfunc skyfunc, lbl_sky.cal) and the sun",
         "  geometry.rad   surfaces" + (" (plastic and glass triangles in geometry.rtm)" if ex.mesh else ""),

@@ -20,6 +20,10 @@ a ``mirror``              the ray reflects about the surface normal; throughput 
 ``glass`` (thin panes)    the ray splits: transmitted straight on (× τ) and reflected
                           (× ρ), both followed (as Radiance's ``rpict`` does); τ and ρ at
                           the ray's angle of incidence (:mod:`lbl_illum.materials`)
+``plastic``               both: a diffuse hit with ρ_d (as a diffuse surface), and the
+                          specular part continued — polished: the mirror direction × ρ_s(θ);
+                          rough: one direction drawn from Ward's lobe × ρ_s × its weight,
+                          plus the sun's highlight by a shadow ray (below)
 ========================  ==============================================================
 
 Emitters are counted wherever a camera path meets them — directly, through glass or
@@ -58,13 +62,19 @@ transport and image synthesis", SIGGRAPH 1990) while the ray count stays bounded
   to the few far pixels.  The spacing is not part of the cache's fingerprint, so this
   does not stop records from being shared.
 
-**Adding a glossy material** (Ward's isotropic model, Radiance's ``plastic``): in
-:func:`trace_view_paths` a hit on it adds a diffuse hit with weight
-throughput · ρ_d/π (its diffuse part goes through the cache like any diffuse surface)
-*and* continues as a specular path in a direction drawn from the Ward lobe with
-throughput × ρ_s · (lobe value / pdf), next to the mirror and glass branches
-(``_continue_specular``).  Its direct highlight from the sun and light surfaces
-would be a shadow-ray estimate at the hit, added to the path's radiance.
+**Plastic** (Radiance's ``plastic``; :mod:`lbl_illum.materials` gives the model).  A
+hit adds a diffuse hit of weight throughput · ρ_d/π — its diffuse part goes through the
+cache like any diffuse surface — *and* continues as a specular path
+(``_continue_specular``, :meth:`~lbl_illum.materials.MaterialTable.reflect`).  On rough
+plastic the sun, a 6.8e-5 sr disk that a lobe sample would rarely meet, is taken
+directly instead: L += ρ_s f_s(v, s) cos θ_s E_dn T(s) for one direction s drawn
+uniformly in the disk, T the transmittance of a shadow ray toward it (what Radiance's
+``dirnorm`` adds for a light source; it widens α² by Ω/4π for flat surfaces in place of
+sampling the disk).  The ray continued from that plastic then does not count the sun
+disk if it escapes — straight on, or through glass, which the shadow ray also crosses —
+so the sun is counted once; after any further reflection it counts again, as no shadow
+ray covered that path.  Light surfaces met by the continued ray count (unbiased; Radiance
+takes them by shadow rays as well and discards them in its specular samples).
 
 Units: lengths [m], luminance [cd/m²], illuminance [lux]; pixels are linear RGB with
 photometric channels (DESIGN.md §2), row 0 the top of the image (:mod:`lbl_illum.views`).
@@ -86,7 +96,7 @@ import numpy as np
 from .cache import IrradianceCache
 from .errors import InputError
 from .integrator import MAX_SPECULAR_DEPTH, Integrator
-from .materials import DIFFUSE, GLASS, LIGHT, MIRROR
+from .materials import GLASS, LIGHT, MIRROR, PLASTIC, russian_roulette, ward_brdf
 from .options import Options
 from .photometry import luminance
 from .progress import ProgressBar as _Bar
@@ -210,68 +220,86 @@ def _scatter_add(out: np.ndarray, index: np.ndarray, values: np.ndarray) -> None
         out[:, c] += np.bincount(index, values[:, c], minlength=len(out))
 
 
-def _roulette(through: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Russian roulette below ``WEIGHT_LIMIT``: (survivors' mask, their throughputs)."""
-    w = luminance(through)
-    low = w < WEIGHT_LIMIT
-    keep = w > 0.0
-    if low.any():
-        u = rng.random(int(low.sum()))
-        survive = u * WEIGHT_LIMIT < w[low]
-        keep[np.flatnonzero(low)] &= survive
-        through = through.copy()
-        through[low] *= (WEIGHT_LIMIT / np.maximum(w[low], 1e-300))[:, None]
-    return keep, through
-
-
-def _continue_specular(integ: Integrator, d, P, Ng, Ns, mat, through, rng):
-    """Continuations of rays that hit a mirror or glass: (rows, origins, directions, throughput).
+def _continue_specular(integ: Integrator, d, P, Ng, Ns, mat, through, rng, sun_done):
+    """Continuations of rays that hit a mirror, glass or plastic:
+    (rows, origins, directions, throughput, sun_done).
 
     ``rows`` index the hits each continuation comes from (a glass hit gives two).
     Mirror: reflection about the shading normal, × ρ.  Glass (thin panes, no
     refraction, as the integrator's): reflection × ρ(θ) and straight transmission
     × τ(θ) at the ray's angle of incidence θ (:meth:`MaterialTable.specular`: Fresnel
-    glazing, or constants).  A glossy material would add its sampled lobe here.
+    glazing, or constants).  Plastic: polished, reflection × ρ_s(θ); rough, a direction
+    drawn from its lobe × ρ_s × the sample's weight (:meth:`MaterialTable.reflect`).
+    Weak branches play Russian roulette (``WEIGHT_LIMIT``).  ``sun_done`` (k,) marks the
+    hits whose ray must not count the sun disk; a continuation inherits it through glass,
+    gets True from rough plastic (whose sun highlight :func:`_sun_highlight` took) and
+    False from any other reflection.
     """
     mats = integ.materials
     kind = mats.kind[mat]
     cos_i = np.einsum("ij,ij->i", d, Ns)
-    if hasattr(mats, "specular"):
-        tau, rho = mats.specular(mat, cos_i)
-    else:                                    # angle-independent tables
-        tau, rho = mats.transmittance[mat], mats.reflectance[mat]
-    refl = d - 2.0 * cos_i[:, None] * Ns
-    reflects = np.flatnonzero(((kind == MIRROR) | (kind == GLASS)) & (rho.max(axis=1) > 0.0))
+    tau, rho = mats.specular(mat, cos_i)
+    reflects = np.flatnonzero(((kind == MIRROR) | (kind == GLASS) | (kind == PLASTIC)) & (rho.max(axis=1) > 0.0))
     transmits = np.flatnonzero((kind == GLASS) & (tau.max(axis=1) > 0.0))
+    refl, rho_refl = mats.reflect(mat[reflects], d[reflects], Ns[reflects], rho[reflects], rng)
     rows = np.concatenate([reflects, transmits])
-    directions = np.concatenate([refl[reflects], d[transmits]])
+    directions = np.concatenate([refl, d[transmits]])
     side = np.concatenate([Ng[reflects], -Ng[transmits]])
-    factor = np.concatenate([rho[reflects], tau[transmits]])
+    factor = np.concatenate([rho_refl, tau[transmits]])
+    done = np.concatenate([mats.glossy[mat[reflects]], sun_done[transmits]])
     new_through = through[rows] * factor
-    keep, new_through = _roulette(new_through, rng)
-    rows, directions, side, new_through = rows[keep], directions[keep], side[keep], new_through[keep]
+    keep, new_through = russian_roulette(new_through, rng, WEIGHT_LIMIT)
+    rows, directions, side, new_through, done = rows[keep], directions[keep], side[keep], new_through[keep], done[keep]
     origins = integ.tracer.offset(P[rows], side)
-    return rows, origins, directions, new_through
+    return rows, origins, directions, new_through, done
+
+
+def _sun_highlight(integ: Integrator, d, P, Ng, Ns, mat, rng) -> np.ndarray:
+    """(k, 3) luminance [cd/m²] of the sun reflected by the lobes of rough plastic hits.
+
+    d : (k, 3) arriving ray directions;  P, Ng, Ns : (k, 3) hit points [m] and normals
+    facing the rays;  mat : (k,) their (rough plastic) materials.  The sun disk of
+    luminance E_dn/Ω gives L = ∫_disk ρ_s f_s(v, ω) cos θ_ω E_dn/Ω dω; one direction s
+    drawn uniformly in the disk estimates it without bias as
+    ρ_s f_s(v, s) cos θ_s E_dn T(s) (:func:`~lbl_illum.materials.ward_brdf`), T the
+    transmittance of a shadow ray toward s (0 behind an opaque surface, τ(θ) through glass:
+    :meth:`DirectLight.transmittance`).
+    """
+    mats, sun = integ.materials, integ.sun
+    k = len(d)
+    L = np.zeros((k, 3))
+    u = rng.random((2, k))
+    s = sun.sample_directions(u[0], u[1])
+    cos_s = np.einsum("ij,ij->i", Ns, s)
+    f = mats.specularity[mat] * ward_brdf(Ns, d, s, mats.roughness[mat])
+    use = np.flatnonzero(f * cos_s > 0.0)
+    if len(use):
+        T = integ.direct.transmittance(integ.tracer.offset(P[use], Ng[use]), s[use])
+        L[use] = (sun.direct_normal_illuminance * f[use] * cos_s[use])[:, None] * T
+    return L
 
 
 def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndarray, rng: np.random.Generator,
                      tmax: np.ndarray | None = None, progress=None):
-    """Follow camera rays through mirrors and glass to the sky, an emitter or a diffuse surface.
+    """Follow camera rays through mirrors, glass and the specular part of plastic to the
+    sky, an emitter or a diffuse surface (plastic's diffuse part among them).
 
     Parameters
     ----------
     integ : the integrator whose tracer, materials, sky and sun are used
     origins, directions : (n, 3) [m] and unit camera rays
-    rng : random numbers for Russian roulette of weak branches
+    rng : random numbers for Russian roulette of weak branches, the lobes of rough
+        plastic and their sun highlights
     tmax : (n,) aft clipping distance [m] of each camera ray (``inf``: none); beyond
         it the ray sees nothing (black), as Radiance's ``-va``
 
     Returns
     -------
-    radiance : (n, 3) [cd/m²] luminance already known: sky, ground glow, sun disk and
-        light surfaces seen along the paths, times their throughput
+    radiance : (n, 3) [cd/m²] luminance already known: sky, ground glow, sun disk,
+        light surfaces and sun highlights on rough plastic seen along the paths, times
+        their throughput
     hits : dict of arrays ``ray`` (m,) camera-ray index, ``P`` (m, 3) [m], ``N`` (m, 3)
-        unit normal facing the arriving ray, ``weight`` (m, 3) = throughput · ρ/π [1/sr]:
+        unit normal facing the arriving ray, ``weight`` (m, 3) = throughput · ρ_d/π [1/sr]:
         the diffuse hits, whose luminance is weight · E(P, N)
     rays : rays traced
     """
@@ -284,7 +312,8 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
     sky, sun = integ.sky, integ.sun
     mats = integ.materials
     material_of = integ.scene.triangles.material
-    diffuse = (mats.kind == DIFFUSE) & (mats.reflectance.max(axis=1) > 0.0)
+    diffuse = mats.diffuse_reflectance.max(axis=1) > 0.0      # diffuse surfaces and plastic
+    sun_done = np.zeros(n, bool)     # the ray must not count the sun disk (see the module text)
     out = {"ray": [], "P": [], "N": [], "weight": []}
     rays = 0
     for depth in range(MAX_SPECULAR_DEPTH + 1):
@@ -305,7 +334,7 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
         if len(esc):
             L = sky.luminance(d[esc])
             if sun is not None:
-                L[sun.within_disk(d[esc])] += sun.luminance
+                L[sun.within_disk(d[esc]) & ~sun_done[esc]] += sun.luminance
             _scatter_add(radiance, ray[esc], through[esc] * L)
         hit = np.flatnonzero(reached)
         if len(hit) == 0:
@@ -317,20 +346,28 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
         lit = np.flatnonzero(kind == LIGHT)
         if len(lit):
             _scatter_add(radiance, ray[hit[lit]], through[hit[lit]] * mats.luminance[mat[lit]])
-        # -- diffuse surfaces end the path; their luminance comes from the cache
+        # -- diffuse surfaces (and plastic's diffuse part) end the path; their luminance
+        #    comes from the cache
         dif = np.flatnonzero(diffuse[mat])
         if len(dif):
             out["ray"].append(ray[hit[dif]])
             out["P"].append(P[dif])
             out["N"].append(Ns[dif])
-            out["weight"].append(through[hit[dif]] * (mats.reflectance[mat[dif]] / np.pi))
-        # -- mirrors and glass continue
-        spec = np.flatnonzero((kind == MIRROR) | (kind == GLASS))
+            rho_d = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif]))
+            out["weight"].append(through[hit[dif]] * (rho_d / np.pi))
+        # -- the sun's highlight on rough plastic, by a shadow ray
+        if sun is not None:
+            gl = np.flatnonzero(mats.glossy[mat])
+            if len(gl):
+                _scatter_add(radiance, ray[hit[gl]], through[hit[gl]] * _sun_highlight(
+                    integ, d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng))
+        # -- mirrors, glass and plastic's specular part continue
+        spec = np.flatnonzero(mats.continues[mat])
         if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
             break
         s_hit = hit[spec]
-        rows, o, d, through = _continue_specular(integ, d[s_hit], P[spec], Ng[spec], Ns[spec], mat[spec],
-                                                 through[s_hit], rng)
+        rows, o, d, through, sun_done = _continue_specular(integ, d[s_hit], P[spec], Ng[spec], Ns[spec], mat[spec],
+                                                           through[s_hit], rng, sun_done[s_hit])
         ray = ray[s_hit][rows]
     if out["ray"]:
         hits_out = {k: np.concatenate(v) for k, v in out.items()}

@@ -366,6 +366,11 @@ def _table(data: Mapping[str, Any], key: str, where: str, label: str) -> Mapping
     return value
 
 
+#: Radiance's reference manual ("Plastic"): specularity fractions above 0.1 and roughness
+#: values above 0.2 are not very realistic; a plastic beyond either gets a warning.
+PLASTIC_REALISTIC = (0.1, 0.2)
+
+
 def _materials(table: Mapping[str, Any] | None, where: str, warnings: list[str]) -> list[Material]:
     """All ``[materials.NAME]`` tables in file order (index = material id).
 
@@ -373,7 +378,9 @@ def _materials(table: Mapping[str, Any] | None, where: str, warnings: list[str])
     surface absorbs nothing, so the interreflections in a closed room form a series that
     does not converge; every run stops it at a finite depth (``bounces`` diffuse levels,
     at most :data:`MAX_BOUNCES`, and :data:`lbl_illum.integrator.MAX_SPECULAR_DEPTH` specular
-    interactions), so the result is finite but grows with ``bounces``.
+    interactions), so the result is finite but grows with ``bounces``.  A plastic with
+    specularity above 0.1 or roughness above 0.2 (:data:`PLASTIC_REALISTIC`) is accepted
+    with a warning too.
     """
     materials = []
     for name, entry in (table or {}).items():
@@ -384,6 +391,11 @@ def _materials(table: Mapping[str, Any] | None, where: str, warnings: list[str])
         if material.kind in ("diffuse", "mirror") and max(material.reflectance) >= 1.0:
             warnings.append(f"{label}: reflectance 1 absorbs no light; interreflections are summed up to the "
                             "bounce limit only, and the result grows with 'bounces'")
+        if material.kind == "plastic" and (material.specularity > PLASTIC_REALISTIC[0]
+                                           or material.roughness > PLASTIC_REALISTIC[1]):
+            warnings.append(f"{label}: specularity above {PLASTIC_REALISTIC[0]:g} or roughness above "
+                            f"{PLASTIC_REALISTIC[1]:g} is not very realistic for plastic (Radiance reference "
+                            "manual); a metal or a coated surface needs another material")
         materials.append(material)
     return materials
 

@@ -107,8 +107,17 @@ def test_commands_and_ambient_options(office_export):
     # (the octree cube of the office is the 200 m ground)
     ar = int(get["-ar"])
     assert 64 * 200.0 / ar == pytest.approx(2.915, rel=0.01)
+    # spacing unknown: -ar 256 written out (rtrace's default; rpict's is 64, and the
+    # same options must mean the same to both)
     opts = ambient_options(Options(bounces=2, accuracy=0.2, samples=64, ambient=179.0 * math.pi))
-    assert opts[:8] == ["-ab", "3", "-aa", "0.2", "-ad", "64", "-as", "0"] and "-ar" not in opts
+    assert opts[:10] == ["-ab", "3", "-aa", "0.2", "-ad", "64", "-as", "0", "-ar", "256"]
+    assert opts.count("-ar") == 1
+
+    def ar_of(o):
+        return o[o.index("-ar") + 1]
+
+    assert ar_of(ambient_options(Options(), max_spacing=2.0)) == "256"                 # no cube
+    assert ar_of(ambient_options(Options(), max_spacing=2.0, cube=100.0)) == "3200"     # 64 · 100 / 2
     assert opts[opts.index("-av") + 1:opts.index("-av") + 4] == ["1", "1", "1"]
 
 
@@ -187,6 +196,15 @@ def test_light_diffuse_mirror_primitives():
     assert white["type"] == "plastic" and white["reals"] == [0.2, 0.5, 0.8, 0, 0]
     mirror = parse_rad(material_primitive("m", Material("m", "mirror", reflectance=(0.9,) * 3)))[0]
     assert mirror["type"] == "mirror" and mirror["reals"] == [0.9] * 3
+
+
+def test_plastic_primitive():
+    """Our plastic is Radiance's: ``void plastic NAME 0 0 5 r g b specularity roughness``."""
+    text = material_primitive("p", Material("p", "plastic", reflectance=(0.2, 0.5, 0.8), specularity=0.05,
+                                            roughness=0.1))
+    assert text == "void plastic p\n0\n0\n5 0.2 0.5 0.8 0.05 0.1\n"
+    prim = parse_rad(text)[0]
+    assert prim["type"] == "plastic" and prim["reals"] == [0.2, 0.5, 0.8, 0.05, 0.1]
 
 
 def test_unit_conversions():
