@@ -856,9 +856,8 @@ def findings(results: dict) -> list[str]:
             f"{_pct(d['default -ar 64']['vs_reference']['median'])}), which puts our `low` image "
             f"{_pct(apart)}"
             " from it on average: the earlier finding's direction and most of its size (the rest of its settings are "
-            "not recorded).  `lbl_illum.radiance.ambient_options` leaves "
-            "`-ar` out when the export has no points, which is always so for an image; its text says the default is "
-            "256, which is rtrace's, not rpict's.  With rpict's default `-lr 7` as well the two errors partly cancel "
+            "not recorded).  `lbl_illum.radiance.ambient_options` therefore always writes `-ar` (the "
+            "matched value, or rtrace's default 256 when the spacing is unknown).  With rpict's default `-lr 7` as well the two errors partly cancel "
             f"({_pct(d['default -ar 64 and -lr 7']['vs_reference']['mean'])}).  With matched `-ar`, `-lr 7` changes "
             f"rpict's mean by {_pct(d['-lr 7']['vs_reference']['mean'] - S['low']['rpict_vs_reference']['mean'], 2)} "
             "here (the office loses little after 7 bounces), so `-lr` matters less than `-ar`.")
