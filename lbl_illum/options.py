@@ -99,10 +99,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 #: against the converged reference: (seconds, mean relative error, max relative error).
 #: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
 PRESET_MEASURED: dict[str, tuple[float, float, float]] = {
-    "draft": (0.69, 0.0151, 0.0359),
-    "low": (1.34, 0.0081, 0.0226),
-    "medium": (2.03, 0.0068, 0.0214),
-    "high": (5.83, 0.0028, 0.0109),
+    "draft": (0.30, 0.0125, 0.0347),
+    "low": (0.66, 0.0110, 0.0276),
+    "medium": (0.83, 0.0069, 0.0218),
+    "high": (1.99, 0.0031, 0.0122),
 }
 
 
