@@ -51,7 +51,7 @@ WORKPLANE_Z = 0.8
 
 FULL = {"ref_samples": 65536, "ref_seeds": 16, "seeds": 4, "presets": tuple(PRESETS),
         "mc_samples": (256, 1024, 4096, 16384)}
-QUICK = {"ref_samples": 4096, "ref_seeds": 2, "seeds": 1, "presets": ("draft",), "mc_samples": (256,)}
+QUICK = {"ref_samples": 4096, "ref_seeds": 2, "seeds": 1, "presets": ("medium",), "mc_samples": (256,)}
 
 
 def _rect(origin, u, v, material):

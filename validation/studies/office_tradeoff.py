@@ -39,7 +39,7 @@ _POINT = [("point samples", f"point samples {p}, a {a:g}, 256 samples",
 _HESSIAN = [("Hessian", f"Hessian, point samples {p}, a {a:g}, {s} samples",
              {"point_samples": p, "accuracy": a, "samples": s, "interpolation": "hessian"})
             for p, s, a in ((512, 64, 0.15), (512, 64, 0.12), (1024, 128, 0.15), (1024, 128, 0.12),
-                            (1024, 128, 0.1), (2048, 128, 0.08), (4096, 128, 0.07), (4096, 256, 0.05))]
+                            (2048, 128, 0.12), (4096, 128, 0.07), (4096, 256, 0.1), (4096, 256, 0.07))]
 _MC = [("pure Monte Carlo", f"accuracy 0, {s} samples", {"accuracy": 0.0, "samples": s})
        for s in (1024, 4096, 16384)]
 _BOUNCES = [("bounces", f"{b} bounces (a 0.1, 256 samples)", {"bounces": b, "samples": 256})
