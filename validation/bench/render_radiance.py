@@ -800,8 +800,8 @@ def findings(results: dict) -> list[str]:
                 f" and rpict at {', '.join(f'`{n}`' for n in rpict_nearer)}" if rpict_nearer else "")
             + ".  On average (the mean error) rpict is " + (
                 "within twice its standard error of the reference at every setting" if rpict_unbiased else
-                "off by more than twice its standard error at some setting") + ", ours with Hessian domains a few "
-            "per cent high (below).")
+                "off by more than twice its standard error at some setting") + "; ours is "
+            + ", ".join(f"{_pct(x['ours_vs_reference']['mean'])} at `{n}`" for n, x in S.items()) + " (below).")
         out.append(
             f"At `low`, rpict's pixels scatter {r['mean_abs'] / max(o['mean_abs'], 1e-12):.1f} times as far from the "
             f"truth as ours, from its ambient cache at `-ad {e['rpict_args'][e['rpict_args'].index('-ad') + 1]}`.  "
@@ -818,32 +818,32 @@ def findings(results: dict) -> list[str]:
     if "low-gradients" in S and "low" in S:
         g, h = S["low-gradients"]["ours_vs_reference"], S["low"]["ours_vs_reference"]
         out.append(
-            f"**Our bias is the Hessian domains', not the renderer's.**  The same render with `interpolation = "
-            f"\"gradients\"` (round domains) is off by {_pct(g['mean'])} ± {_apct(g['stderr_of_mean'], 2)} on average "
-            f"({_apct(g['mean_abs'])} mean abs) where the `low` preset's `hessian` gives {_pct(h['mean'])} ± "
-            f"{_apct(h['stderr_of_mean'], 2)}; with more samples (`low-512`, `fine`) the Hessian bias stays "
-            + ", ".join(f"{_pct(S[n]['ours_vs_reference']['mean'])} (`{n}`)" for n in ("low-512", "fine") if n in S)
-            + ".  The camera paths, the ρ/π · E shading and the cache lookups are right (gradients: no bias beyond "
-              "the reference's noise); a likely mechanism, not verified here: the engine's elliptical domains let "
-              "records serve farther along their long axis, where the illuminance falls off convexly from the "
-              "window, and an average of a convex function over a domain lies above its value at the centre.")
+            f"**Our mean error is the cache's interpolation.**  The `low` render with `interpolation = "
+            f"\"gradients\"` (round domains) is off by {_pct(g['mean'])} ± {_apct(g['stderr_of_mean'], 2)} on "
+            f"average ({_apct(g['mean_abs'])} mean abs), with the preset's `hessian` by {_pct(h['mean'])} ± "
+            f"{_apct(h['stderr_of_mean'], 2)} ({_apct(h['mean_abs'])}); "
+            + ", ".join(f"{_pct(S[n]['ours_vs_reference']['mean'])} at `{n}`" for n in ("low-512", "fine") if n in S)
+            + ".  It falls with the accuracy a (`fine`: a = 0.1), not with the samples: at a given a, more samples "
+              "make the records' gradient estimates less noisy and their domains larger.  An image interpolates "
+              "level 0 (no point samples); where the illuminance peaks mid-wall and falls towards the floor, the "
+              "ceiling and the window's edges, a record's first-order extrapolation overestimates its neighbours "
+              "(docs/rendering.md, Limitations).")
         wall = [(n, S[n]["ours_vs_reference"].get("by_surface", {}).get("window wall"))
                 for n in ("low", "low-512", "fine") if n in S]
         gw = S["low-gradients"]["ours_vs_reference"].get("by_surface", {}).get("window wall")
         if all(v is not None for _, v in wall) and gw is not None:
             out.append(
-                "The Hessian bias is largest on the window wall (the wall around the window, lit only by the "
-                "room): " + ", ".join(f"{_pct(v)} at `{n}`" for n, v in wall) + f", against {_pct(gw)} with "
-                "gradients (the table by surface).  The edges where that wall meets the floor and ceiling also "
-                "show speckles in our images (outside the compared pixels; docs/rendering.md, Limitations: "
-                "Corners).")
+                "The error is largest on the window wall (the wall around the window, lit only by the room): "
+                + ", ".join(f"{_pct(v)} at `{n}`" for n, v in wall) + f", and {_pct(gw)} with gradients at "
+                "`low` (the table by surface).  The edges where that wall meets the floor and ceiling also show "
+                "speckles in our images (outside the compared pixels; docs/rendering.md, Limitations: Corners).")
         sensor = S["low"].get("diagnostics", {}).get("sensor points")
         if sensor:
             out.append(
-                "The same holds for sensor points: at the reference pixels' hit points, as illuminance sensors with "
-                "the `low` preset (point samples 1024, so only the deeper levels interpolate), the mean error is "
+                "At the reference pixels' hit points as illuminance sensors with the `low` preset (point "
+                "samples, so only the deeper levels interpolate) the mean error is "
                 f"{_pct(sensor['hessian']['mean'])} with `hessian` and {_pct(sensor['gradients']['mean'])} with "
-                "`gradients`.  This is the engine's (integrator and octree), reported to its owner.")
+                "`gradients`.")
     if "low" in S and "default -ar 64" in S["low"].get("diagnostics", {}):
         d = S["low"]["diagnostics"]
         apart = (1 + S["low"]["ours_vs_reference"]["mean"]) / (1 + d["default -ar 64"]["vs_reference"]["mean"]) - 1
