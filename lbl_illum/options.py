@@ -99,10 +99,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 #: against the converged reference: (seconds, mean relative error, max relative error).
 #: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
 PRESET_MEASURED: dict[str, tuple[float, float, float]] = {
-    "draft": (0.29, 0.0080, 0.0341),
-    "low": (0.59, 0.0053, 0.0158),
-    "medium": (0.95, 0.0055, 0.0165),
-    "high": (2.87, 0.0029, 0.0117),
+    "draft": (0.31, 0.0080, 0.0341),
+    "low": (0.75, 0.0053, 0.0158),
+    "medium": (1.10, 0.0055, 0.0165),
+    "high": (3.09, 0.0029, 0.0117),
 }
 
 
