@@ -145,17 +145,14 @@ CHILD = textwrap.dedent("""
 """)
 
 
-@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
-@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
-def test_signalled_subprocess_saves_and_resumes(office, reference, tmp_path, signum):
-    """Kill a run in a subprocess during evaluation of level 1; the next run resumes."""
-    scene, points, normals = office
-    path = tmp_path / "office.lblcache"
+def signal_child(tmp_path, cache, stage, signum, *extra):
+    """Run CHILD on the office with ``cache``; when it reaches ``stage`` send ``signum``.
+    Returns (return code, standard output, standard error)."""
     script = tmp_path / "child.py"
     script.write_text(CHILD)
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     child = subprocess.Popen([sys.executable, str(script), str(EXAMPLES / "office" / "scene.toml"),
-                              str(EXAMPLES / "office" / "grid.pts"), str(path), "evaluating level 1"],
+                              str(EXAMPLES / "office" / "grid.pts"), str(cache), stage, *map(str, extra)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     try:
         line = child.stdout.readline()
@@ -165,7 +162,17 @@ def test_signalled_subprocess_saves_and_resumes(office, reference, tmp_path, sig
     finally:
         if child.poll() is None:
             child.kill()
-    assert child.returncode == 130, err
+    return child.returncode, out, err
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_signalled_subprocess_saves_and_resumes(office, reference, tmp_path, signum):
+    """Kill a run in a subprocess during evaluation of level 1; the next run resumes."""
+    scene, points, normals = office
+    path = tmp_path / "office.lblcache"
+    code, out, err = signal_child(tmp_path, path, "evaluating level 1", signum)
+    assert code == 130, err
     assert "SAVED" in out
     saved = IrradianceCache.load(path).record_counts
     assert saved == [0, 0, reference["round"].stats.records[2]]
@@ -183,21 +190,8 @@ def test_subprocess_terminated_while_placing_resumes(office, blocked_reference, 
     scene, points, normals = office
     stage = f"placing level 0 ({len(points) - SMALL_BLOCK} queries, block 2 of 2)"
     path = tmp_path / "office.lblcache"
-    script = tmp_path / "child.py"
-    script.write_text(CHILD)
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    child = subprocess.Popen([sys.executable, str(script), str(EXAMPLES / "office" / "scene.toml"),
-                              str(EXAMPLES / "office" / "grid.pts"), str(path), stage, str(SMALL_BLOCK)],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        line = child.stdout.readline()
-        assert line.strip() == "READY", child.stderr.read()
-        child.send_signal(signal.SIGTERM)
-        out, err = child.communicate(timeout=60)
-    finally:
-        if child.poll() is None:
-            child.kill()
-    assert child.returncode == 130, err
+    code, out, err = signal_child(tmp_path, path, stage, signal.SIGTERM, SMALL_BLOCK)
+    assert code == 130, err
     saved = IrradianceCache.load(path).record_counts
     assert saved[0] > 0 and all(saved)
     second = Integrator(scene, OPTS)
@@ -215,19 +209,7 @@ def test_killed_subprocess_leaves_the_old_file_intact(office, tmp_path):
     first.attach_cache_file(path)
     first.compute(points[:4], normals[:4])
     before = path.read_bytes()
-    script = tmp_path / "child.py"
-    script.write_text(CHILD)
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    child = subprocess.Popen([sys.executable, str(script), str(EXAMPLES / "office" / "scene.toml"),
-                              str(EXAMPLES / "office" / "grid.pts"), str(path), "writing the cache file"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert child.stdout.readline().strip() == "READY"
-        child.kill()
-        child.communicate(timeout=60)
-    finally:
-        if child.poll() is None:
-            child.kill()
+    signal_child(tmp_path, path, "writing the cache file", signal.SIGKILL)
     time.sleep(0.05)
     assert path.read_bytes() == before
     assert IrradianceCache.load(path).record_counts == first.cache.record_counts
