@@ -21,10 +21,20 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["add_cache_commands", "run_cache_command", "cache_statistics"]
+__all__ = ["add_cache_commands", "add_cache_file_arguments", "run_cache_command", "cache_statistics"]
 
 #: Quantiles of R_i reported per level.
 RADIUS_QUANTILES = (0.0, 0.1, 0.5, 0.9, 1.0)
+
+
+def add_cache_file_arguments(group) -> None:
+    """``--cache FILE``, ``--rebuild-cache`` and ``--stats FILE`` of the commands that
+    compute (illuminance, daylight-factor, render); see docs/cache-files.md."""
+    group.add_argument("--cache", metavar="FILE", help="keep the cache's records in FILE: read them if it exists, "
+                       "write them back (merged with other runs' records) at the end and when interrupted")
+    group.add_argument("--rebuild-cache", action="store_true", help="with --cache: replace FILE, even one made "
+                       "for other settings or a damaged one, instead of refusing it")
+    group.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
 
 
 def add_cache_commands(subparsers) -> None:

@@ -129,12 +129,9 @@ def _add_quality_options(p) -> None:
 
 def _add_file_options(p) -> None:
     """Cache and statistics files, shared by ``illuminance`` and ``daylight-factor``."""
-    r = p.add_argument_group("files")
-    r.add_argument("--cache", metavar="FILE", help="keep the cache's records in FILE: read them if it exists, write "
-                   "them back (merged with other runs' records) at the end and when interrupted")
-    r.add_argument("--rebuild-cache", action="store_true", help="with --cache: replace FILE, even one made for "
-                   "other settings or a damaged one, instead of refusing it")
-    r.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
+    from .cachecli import add_cache_file_arguments
+
+    add_cache_file_arguments(p.add_argument_group("files"))
 
 
 def _add_report_options(p, thresholds: str, unit: str) -> None:
@@ -710,62 +707,6 @@ def _run_validate(args) -> int:
     return 0
 
 
-#: Largest -x or -y of ``render`` [pixels] (OpenEXR and TIFF take more, but the one batch of
-#: camera rays would not fit any machine's memory long before).
-MAX_IMAGE_SIDE = 16384
-#: Memory a camera ray (one pixel sample) takes through ``render``'s single batch [bytes]:
-#: measured 0.45 KiB on examples/office (1024 × 1024 pixels, one sample, through glass and
-#: onto diffuse walls: 470 MB above the 160 MB the process starts with); twice that for
-#: scenes whose glass splits more paths.
-BYTES_PER_CAMERA_RAY = 1024
-
-
-def _available_memory() -> int | None:
-    """Memory available to a new allocation [bytes] (Linux ``MemAvailable``, else the free
-    physical pages), or None when the system does not say."""
-    import os
-
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
-def _check_render_size(args) -> None:
-    """Refuse an image that cannot be rendered before any work: -x, -y or --pixel-samples
-    below 1, a side above :data:`MAX_IMAGE_SIDE`, or more camera rays (x · y · pixel samples,
-    all traced in one batch) than the available memory holds at
-    :data:`BYTES_PER_CAMERA_RAY` each.  The count is an upper bound: the view's aspect may
-    reduce one side (rpict's square pixels), never enlarge it."""
-    sizes = {}
-    for name, flag in (("x", "-x"), ("y", "-y"), ("pixel_samples", "--pixel-samples")):
-        value = getattr(args, name, None)
-        if value is None:
-            continue
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise InputError(f"{flag} must be a positive whole number, got {value}")
-        if flag != "--pixel-samples" and value > MAX_IMAGE_SIDE:
-            raise InputError(f"{flag} {value} is more than the {MAX_IMAGE_SIDE} pixels allowed per side")
-        sizes[name] = value
-    rays = sizes.get("x", 512) * sizes.get("y", 512) * sizes.get("pixel_samples", 1)
-    need = rays * BYTES_PER_CAMERA_RAY
-    have = _available_memory()
-    if have is not None and need > have:
-        from .errors import plural
-
-        raise InputError(f"-x {sizes.get('x', 512)} -y {sizes.get('y', 512)} with "
-                         f"{plural(sizes.get('pixel_samples', 1), 'pixel sample')} is {rays:,} camera rays, traced in "
-                         f"one batch: about {need / 2 ** 30:.3g} GiB of memory, more than the {have / 2 ** 30:.3g} GiB "
-                         "available; render a smaller image")
-
-
 def _one_line(exc: BaseException) -> str:
     """An error message as one line (line breaks of a message quoted from elsewhere become spaces)."""
     return " ".join(str(exc).split("\n")).replace("\r", " ")
@@ -787,8 +728,8 @@ def main(argv=None) -> int:
         if args.command == "view":
             return _run_view(args)
         if args.command == "render":
-            _check_render_size(args)
-            from .render import render_command
+            from .render import check_image_size, render_command
+            check_image_size(args)          # before the scene is even read
             return render_command(args)
         if args.command == "validate":
             return _run_validate(args)

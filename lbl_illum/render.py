@@ -94,7 +94,7 @@ from typing import Any
 import numpy as np
 
 from .cache import IrradianceCache
-from .errors import InputError
+from .errors import InputError, plural
 from .integrator import MAX_SPECULAR_DEPTH, Integrator
 from .materials import GLASS, LIGHT, MIRROR, PLASTIC, russian_roulette, ward_brdf
 from .options import Options
@@ -104,7 +104,8 @@ from .scene import Scene
 from .views import View, view_from_file, view_from_string, views_from_table
 
 __all__ = ["RenderResult", "RenderStats", "render", "render_command", "add_render_arguments",
-           "trace_view_paths", "image_options", "view_spacing", "resolve_view", "WEIGHT_LIMIT"]
+           "trace_view_paths", "image_options", "view_spacing", "resolve_view", "check_image_size",
+           "WEIGHT_LIMIT", "MAX_IMAGE_SIDE"]
 
 #: Photometric throughput below which a specular branch plays Russian roulette
 #: (the role of Radiance's ``-lw``).
@@ -559,11 +560,9 @@ def add_render_arguments(parser) -> None:
                    "(default: a round number above the 99th percentile)")
     o.add_argument("--falsecolor-scale", choices=("linear", "log"), default="linear",
                    help="false-colour bands: equal steps (linear, default) or equal ratios (log)")
-    o.add_argument("--cache", metavar="FILE", help="keep the cache's records in FILE: read them if it exists, write "
-                   "them back (merged with other runs' records) at the end and when interrupted")
-    o.add_argument("--rebuild-cache", action="store_true", help="with --cache: replace FILE, even one made for "
-                   "other settings or a damaged one, instead of refusing it")
-    o.add_argument("--stats", metavar="FILE", help="write run statistics as JSON")
+    from .cachecli import add_cache_file_arguments
+
+    add_cache_file_arguments(o)
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
 
 
@@ -587,6 +586,60 @@ def _options_from_args(scene: Scene, args) -> Options:
 
 
 
+#: Largest -x or -y of ``render`` [pixels] (OpenEXR and TIFF take more, but the one batch of
+#: camera rays would not fit any machine's memory long before).
+MAX_IMAGE_SIDE = 16384
+#: Memory a camera ray (one pixel sample) takes through ``render``'s single batch [bytes]:
+#: measured 0.45 KiB on examples/office (1024 × 1024 pixels, one sample, through glass and
+#: onto diffuse walls: 470 MB above the 160 MB the process starts with); twice that for
+#: scenes whose glass splits more paths.
+BYTES_PER_CAMERA_RAY = 1024
+
+
+def _available_memory() -> int | None:
+    """Memory available to a new allocation [bytes] (Linux ``MemAvailable``, else the free
+    physical pages), or None when the system does not say."""
+    import os
+
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_image_size(args) -> None:
+    """Refuse an image that cannot be rendered before any work: -x, -y or --pixel-samples
+    below 1, a side above :data:`MAX_IMAGE_SIDE`, or more camera rays (x · y · pixel samples,
+    all traced in one batch) than the available memory holds at
+    :data:`BYTES_PER_CAMERA_RAY` each.  The count is an upper bound: the view's aspect may
+    reduce one side (rpict's square pixels), never enlarge it."""
+    sizes = {}
+    for name, flag in (("x", "-x"), ("y", "-y"), ("pixel_samples", "--pixel-samples")):
+        value = getattr(args, name, None)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise InputError(f"{flag} must be a positive whole number, got {value}")
+        if flag != "--pixel-samples" and value > MAX_IMAGE_SIDE:
+            raise InputError(f"{flag} {value} is more than the {MAX_IMAGE_SIDE} pixels allowed per side")
+        sizes[name] = value
+    rays = sizes.get("x", 512) * sizes.get("y", 512) * sizes.get("pixel_samples", 1)
+    need = rays * BYTES_PER_CAMERA_RAY
+    have = _available_memory()
+    if have is not None and need > have:
+        raise InputError(f"-x {sizes.get('x', 512)} -y {sizes.get('y', 512)} with "
+                         f"{plural(sizes.get('pixel_samples', 1), 'pixel sample')} is {rays:,} camera rays, traced in "
+                         f"one batch: about {need / 2 ** 30:.3g} GiB of memory, more than the {have / 2 ** 30:.3g} GiB "
+                         "available; render a smaller image")
+
+
 def _check_outputs(args) -> None:
     """Refuse bad output paths and numbers before any work."""
     from .images import check_image_path
@@ -598,10 +651,7 @@ def _check_outputs(args) -> None:
     for extra in (_arg(args, "cache"), _arg(args, "stats")):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
-    for name, flag in (("x", "-x"), ("y", "-y"), ("pixel_samples", "--pixel-samples")):
-        value = _arg(args, name)
-        if value is not None and value < 1:
-            raise InputError(f"{flag} must be a positive whole number, got {value}")
+    check_image_size(args)
     top = _arg(args, "falsecolor_max")
     if top is not None and not (math.isfinite(top) and top > 0):
         raise InputError(f"--falsecolor-max must be a positive luminance [cd/m2], got {top:g}")

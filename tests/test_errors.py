@@ -497,10 +497,9 @@ def test_every_command_leaves_its_outputs_alone(tmp_path, capsys, command, fault
 ])
 def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch, size, expect):
     """With 1 GiB said to be available: nothing is read, rendered or written."""
-    import lbl_illum.cli as cli
     import lbl_illum.render as render
 
-    monkeypatch.setattr(cli, "_available_memory", lambda: 2 ** 30)
+    monkeypatch.setattr(render, "_available_memory", lambda: 2 ** 30)
     monkeypatch.setattr(render, "render_command", lambda args: pytest.fail("render started"))
     prepare(tmp_path, BAD_SCENE, files=OUTPUTS)          # not even the scene is read
     argv = ["render", tmp_path / "scene.toml", VIEW, "-o", tmp_path / "image.hdr", *size]
@@ -508,17 +507,16 @@ def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch,
 
 
 def test_render_sizes_that_fit_go_ahead(tmp_path, capsys, monkeypatch):
-    import lbl_illum.cli as cli
     import lbl_illum.render as render
 
     started = []
-    monkeypatch.setattr(cli, "_available_memory", lambda: 2 ** 30)
+    monkeypatch.setattr(render, "_available_memory", lambda: 2 ** 30)
     monkeypatch.setattr(render, "render_command", lambda args: started.append((args.x, args.y)) or 0)
     assert main(["render", "s.toml", VIEW, "-o", str(tmp_path / "i.hdr"), "-x", "1024", "-y", "1024"]) == 0
-    monkeypatch.setattr(cli, "_available_memory", lambda: None)         # unknown: only the side limit
+    monkeypatch.setattr(render, "_available_memory", lambda: None)         # unknown: only the side limit
     assert main(["render", "s.toml", VIEW, "-o", str(tmp_path / "i.hdr"), "-x", "16384", "-y", "16384"]) == 0
     assert started == [(1024, 1024), (16384, 16384)]
-    have = cli._available_memory()
+    have = render._available_memory()
     assert have is None or have > 0
 
 
