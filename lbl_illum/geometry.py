@@ -22,7 +22,7 @@ from .errors import InputError, check_keys, get_number, get_vector, show
 __all__ = [
     "Triangles", "MeshPart", "Shape", "SHAPE_KEYS", "SPHERE_SUBDIVISIONS", "SPHERE_MAX_DEVIATION",
     "PLANAR_TOLERANCE", "load_mesh_file", "shape_from_table", "sphere_triangles", "box_triangles",
-    "rectangle_triangles", "polygon_triangles", "triangulate_polygon", "degenerate_mask",
+    "rectangle_triangles", "polygon_triangles", "degenerate_mask",
     "duplicate_mask", "TriangleSampler", "MAX_COORDINATE", "check_coordinates",
 ]
 
@@ -130,14 +130,18 @@ class MeshPart:
         return f"'{self.name}'" + (f" ({', '.join(extra)})" if extra else "")
 
 
-def load_mesh_file(path: Path, where: str, scale: float = 1.0) -> list[MeshPart]:
+def load_mesh_file(path: Path, where: str, scale: float = 1.0, warnings: list[str] | None = None
+                   ) -> list[MeshPart]:
     """The triangles of a geometry file as named parts, in metres.
 
     ``scale`` is metres per file unit.  Any format trimesh reads (OBJ, PLY, STL, glTF/GLB,
     OFF, ...) is accepted; faces are neither merged nor reordered (``process=False``,
-    ``maintain_order=True``) and scene-graph transforms are applied.  A missing or
-    unreadable file, or one without triangles, is an :class:`InputError` starting with
-    ``where``.
+    ``maintain_order=True``) and scene-graph transforms are applied.  OBJ faces of more
+    than three vertices are triangulated as drawn, holes and keyhole seams included
+    (:mod:`lbl_illum.polygons`), not fanned; a face whose triangles' area differs from its
+    polygon's by more than 0.1 %, or that has no area, is reported in ``warnings`` (a
+    list the messages are appended to).  A missing or unreadable file, or one without
+    triangles, is an :class:`InputError` starting with ``where``.
     """
     path = Path(path)
     if path.is_dir():
@@ -146,7 +150,7 @@ def load_mesh_file(path: Path, where: str, scale: float = 1.0) -> list[MeshPart]
         raise InputError(f"{where}: no such file ({path})")
     _quiet_trimesh()
     try:
-        scene = _load_trimesh_scene(path)
+        scene = _load_trimesh_scene(path, where, scale, warnings)
         parts = _scene_parts(scene, scale, obj_name=path.name if path.suffix.lower() == ".obj" else None,
                              where=where)
     except InputError:
@@ -180,27 +184,30 @@ def _quiet_trimesh() -> None:
         log.addHandler(logging.NullHandler())
 
 
-def _load_trimesh_scene(path: Path):
+def _load_trimesh_scene(path: Path, where: str, scale: float, warnings: list[str] | None):
     """``trimesh.Scene`` of a file; OBJ files go through :func:`_read_obj`."""
     import trimesh
 
     if path.suffix.lower() == ".obj":
-        return _read_obj(path)
+        return _read_obj(path, where, scale, warnings)
     return trimesh.load(str(path), force="scene", process=False, maintain_order=True)
 
 
-def _read_obj(path: Path):
-    """Load an OBJ keeping every ``usemtl`` name and ``g`` group.
+def _read_obj(path: Path, where: str = "obj", scale: float = 1.0, warnings: list[str] | None = None):
+    """Load an OBJ keeping every ``usemtl`` name and ``g`` group, its polygons as drawn.
 
     trimesh splits an OBJ at every ``usemtl`` but only remembers the name when the
     ``.mtl`` library loads, so a library naming every ``usemtl`` is synthesised (the
     scene file defines the materials; the ``.mtl`` colours are not used).  Groups
     become separate sub-meshes (``split_groups``); ``group_material`` stays on, since
-    without it trimesh merges a group's faces of different materials.
+    without it trimesh merges a group's faces of different materials.  Faces of more
+    than three vertices are replaced by their triangles first (:func:`_triangulate_obj`):
+    trimesh would fan them.
     """
     import trimesh
 
     text = path.read_bytes().decode("utf-8", errors="replace")
+    text = _triangulate_obj(text, where, scale, warnings)
     names = list(dict.fromkeys(" ".join(m.split()) for m in
                                re.findall(r"^[ \t]*usemtl[ \t]+(.+?)[ \t]*\r?$", text, flags=re.M)))
     resolver = {}
@@ -211,6 +218,82 @@ def _read_obj(path: Path):
     stream.name = path.name
     return trimesh.load(stream, file_type="obj", resolver=resolver, force="scene", process=False,
                         maintain_order=True, split_groups=True, group_material=True)
+
+
+#: A face line of four or more vertices (``f a b c d ...``, each ``v``, ``v/t``, ``v//n`` or ``v/t/n``).
+_OBJ_POLYGON = re.compile(r"^[ \t]*f(?:[ \t]+[^\s#]+){4,}", re.M)
+#: Faces named one by one in a warning about triangulated areas; the rest are counted.
+_FACES_NAMED = 5
+
+
+def _triangulate_obj(text: str, where: str, scale: float, warnings: list[str] | None) -> str:
+    """``text`` with every OBJ face of more than three vertices replaced by its triangles,
+    read as drawn by the even–odd rule (:func:`lbl_illum.polygons.triangulate_faces`):
+    non-convex outlines, holes joined by keyhole seams, either winding.  Each triangle
+    keeps its corners' ``v/t/n`` references.  Faces whose triangles' area differs from
+    the polygon's by more than :data:`~lbl_illum.polygons.AREA_TOLERANCE`, and faces of
+    zero area (dropped), are reported in ``warnings`` by line, with both areas in m².
+    Text without such faces is returned unchanged."""
+    from .polygons import AREA_TOLERANCE, triangulate_faces
+
+    if not _OBJ_POLYGON.search(text):
+        return text
+    lines = text.split("\n")
+    coords, polygons = [], []          # vertex lines' numbers; (line, vertex tokens) of polygons
+    for i, line in enumerate(lines):
+        head = line.lstrip()[:2]
+        if head == "v " or head == "v\t":
+            coords.append(line.split()[1:4])
+        elif head == "f " or head == "f\t":
+            tokens = line.split("#", 1)[0].split()[1:]
+            if len(tokens) > 3:
+                polygons.append((i, tokens, len(coords)))
+    try:
+        V = np.array(coords, dtype=np.float64).reshape(-1, 3)
+    except ValueError:
+        return text                    # malformed vertices: trimesh says what is wrong
+    points, faces, offset = [], [], 0
+    for line, tokens, defined in polygons:
+        index = []
+        for token in tokens:
+            try:
+                k = int(token.split("/", 1)[0])
+            except ValueError:
+                return text
+            index.append(k - 1 if k > 0 else defined + k)
+        index = np.array(index, np.int64)
+        if index.min() < 0 or index.max() >= len(V):
+            return text                # trimesh refuses the reference (see _scene_parts)
+        points.append(V[index])
+        faces.append(np.arange(offset, offset + len(index)))
+        offset += len(index)
+    result = triangulate_faces(np.concatenate(points), faces)
+    first = np.concatenate([[0], np.cumsum([len(t) for _, t, _ in polygons])])
+    out = [[] for _ in polygons]
+    for face, tri in zip(result.face, result.triangles):
+        tokens = polygons[face][1]
+        base = first[face]
+        out[face].append("f " + " ".join(tokens[int(c) - base] for c in tri))
+    for (line, _, _), triangles in zip(polygons, out):
+        lines[line] = "\n".join(triangles)
+    if warnings is not None:
+        area_m2 = scale * scale
+        bad = result.mismatched(AREA_TOLERANCE)
+        empty = np.flatnonzero(result.polygon_area <= 0.0)
+        if len(bad):
+            named = "; ".join(f"line {polygons[f][0] + 1} ({len(polygons[f][1])} vertices): triangles "
+                              f"{result.triangle_area[f] * area_m2:.6g} m², polygon {result.polygon_area[f] * area_m2:.6g} m²"
+                              for f in bad[:_FACES_NAMED])
+            more = f"; and {len(bad) - _FACES_NAMED} more" if len(bad) > _FACES_NAMED else ""
+            warnings.append(f"{where}: {len(bad)} {'face' if len(bad) == 1 else 'faces'} whose triangles' area "
+                            f"differs from the polygon's by more than {100 * AREA_TOLERANCE:g} % (edges that "
+                            f"cross?): {named}{more}")
+        if len(empty):
+            named = ", ".join(str(polygons[f][0] + 1) for f in empty[:_FACES_NAMED])
+            more = f" and {len(empty) - _FACES_NAMED} more" if len(empty) > _FACES_NAMED else ""
+            warnings.append(f"{where}: dropped {len(empty)} {'face' if len(empty) == 1 else 'faces'} of zero area "
+                            f"(line {named}{more})")
+    return "\n".join(lines)
 
 
 def _scene_parts(scene, scale: float, obj_name: str | None, where: str = "geometry file") -> list[MeshPart]:
@@ -381,87 +464,37 @@ def rectangle_triangles(origin, u, v, where: str = "rectangle") -> np.ndarray:
 
 
 def polygon_triangles(points, where: str = "polygon") -> np.ndarray:
-    """(n-2 or fewer, 3, 3) triangles of a planar polygon given by its (n, 3) vertices.
+    """(m, 3, 3) triangles of a planar polygon given by its (n, 3) vertices.
 
-    The polygon may be non-convex; triangles are wound like the vertex order (normal by
-    the right-hand rule).  Fewer than 3 vertices, zero area, vertices off the plane by
-    more than ``PLANAR_TOLERANCE`` of the diameter, and self-intersection are refused.
-    Units are those of ``points``.
+    The polygon may be non-convex and may have holes joined to its outline by keyhole
+    seams, wound either way: it is read by the even–odd rule, as Radiance reads
+    polygons (:func:`lbl_illum.polygons.triangulate_face`).  Triangles are wound like the
+    polygon (normal by the right-hand rule over its outline).  Fewer than 3 vertices,
+    zero area, vertices off the plane by more than ``PLANAR_TOLERANCE`` of the diameter,
+    and edges that cross (triangles whose area differs from the polygon's by more than
+    :data:`~lbl_illum.polygons.AREA_TOLERANCE`) are refused.  Units are those of ``points``.
     """
+    from .polygons import AREA_TOLERANCE, face_frame, triangulate_face
+
     p = check_coordinates(points, where, "vertex coordinate").reshape(-1, 3)
     if len(p) < 3:
         raise InputError(f"{where}: a polygon needs at least 3 vertices, got {len(p)}")
     diameter = float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
     area_vector = 0.5 * np.sum(np.cross(p, np.roll(p, -1, axis=0)), axis=0)     # Newell
-    area = float(np.linalg.norm(area_vector))
-    if area <= _EPS * diameter * diameter:
+    if float(np.linalg.norm(area_vector)) <= _EPS * diameter * diameter:
         raise InputError(f"{where}: the polygon has zero area")
-    normal = area_vector / area
+    normal = face_frame(p)[0]
     off = np.abs((p - p.mean(axis=0)) @ normal)
     if off.max() > PLANAR_TOLERANCE * diameter:
         k = int(off.argmax())
         raise InputError(f"{where}: the polygon is not planar (vertex {k} is {off[k]:.3g} off its plane)")
-    u = np.cross(normal, np.eye(3)[int(np.argmin(np.abs(normal)))])
-    u /= np.linalg.norm(u)
-    xy = np.stack([p @ u, p @ np.cross(normal, u)], axis=1)     # counter-clockwise about normal
-    try:
-        index = triangulate_polygon(xy)
-    except ValueError:
-        index = np.zeros((0, 3), dtype=np.int64)
+    index, area = triangulate_face(p)
     tri = p[index]
-    tri_area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
-    if abs(tri_area - area) > 1e-9 * area:
-        raise InputError(f"{where}: the polygon cannot be triangulated (do its edges cross?)")
+    tri_area = float(0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+    if area <= 0.0 or abs(tri_area - area) > AREA_TOLERANCE * area:
+        raise InputError(f"{where}: the polygon cannot be triangulated as drawn (do its edges cross?): its "
+                         f"triangles cover {tri_area:.6g}, the polygon {area:.6g} square units")
     return tri
-
-
-def triangulate_polygon(xy: np.ndarray) -> np.ndarray:
-    """(m, 3) vertex indices triangulating a simple counter-clockwise 2-D polygon (ear clipping).
-
-    Collinear vertices are skipped (m may be below n-2); raises ValueError when no ear
-    is left (self-intersecting or clockwise input).
-    """
-    xy = np.asarray(xy, dtype=np.float64)
-    scale = float(np.ptp(xy, axis=0).max()) if len(xy) else 0.0
-    eps = _EPS * scale * scale
-    ring, out, i, misses = list(range(len(xy))), [], 0, 0
-    while len(ring) > 3:
-        n = len(ring)
-        a, b, c = ring[(i - 1) % n], ring[i % n], ring[(i + 1) % n]
-        cross = _cross2(xy[a], xy[b], xy[c])
-        if abs(cross) <= eps:                       # straight (or spike): drop without a triangle
-            ring.pop(i % n)
-            misses = 0
-        elif cross > eps and not _blocked(xy, ring, a, b, c, eps):
-            out.append((a, b, c))
-            ring.pop(i % n)
-            misses = 0
-        else:
-            i, misses = i + 1, misses + 1
-            if misses > n:
-                raise ValueError("no ear: the polygon is self-intersecting or clockwise")
-    if len(ring) == 3 and _cross2(*xy[ring]) > eps:
-        out.append(tuple(ring))
-    return np.array(out, dtype=np.int64).reshape(-1, 3)
-
-
-def _cross2(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
-    """z of (b - a) × (c - b): positive when a, b, c turn counter-clockwise."""
-    return float((b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]))
-
-
-def _blocked(xy: np.ndarray, ring: list[int], a: int, b: int, c: int, eps: float) -> bool:
-    """True when another ring vertex lies in (or on) the triangle a, b, c."""
-    others = np.array([k for k in ring if k not in (a, b, c)], dtype=np.int64)
-    q = xy[others]
-    corners = xy[[a, b, c]]
-    q = q[~np.any(np.all(q[:, None, :] == corners[None, :, :], axis=2), axis=1)]
-    if len(q) == 0:
-        return False
-    inside = np.ones(len(q), dtype=bool)
-    for p0, p1 in ((xy[a], xy[b]), (xy[b], xy[c]), (xy[c], xy[a])):
-        inside &= (p1[0] - p0[0]) * (q[:, 1] - p0[1]) - (p1[1] - p0[1]) * (q[:, 0] - p0[0]) >= -eps
-    return bool(inside.any())
 
 
 # ---------------------------------------------------------------------------

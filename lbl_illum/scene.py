@@ -441,7 +441,7 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, ids: dict[
         if "file" in entry and "shape" in entry:
             raise InputError(f"{label}: give either 'file' or 'shape', not both")
         if "file" in entry:
-            chunks.append(_file_chunk(entry, label, base_dir, scale, ids))
+            chunks.append(_file_chunk(entry, label, base_dir, scale, ids, warnings))
         elif "shape" in entry:
             chunk, shape = _shape_chunk(entry, label, scale, ids, len(centers))
             chunks.append(chunk)
@@ -483,8 +483,9 @@ def _shape_chunk(entry: Mapping[str, Any], label: str, scale: float, ids: dict[s
 
 
 def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: float,
-                ids: dict[str, int]) -> _Chunk:
-    """A geometry-file entry: every sub-mesh gets its mapped material or the default."""
+                ids: dict[str, int], warnings: list[str]) -> _Chunk:
+    """A geometry-file entry: every sub-mesh gets its mapped material or the default.
+    Faces triangulated with a mismatch of areas are reported in ``warnings``."""
     check_keys(entry, FILE_KEYS, label)
     file = entry["file"]
     if not isinstance(file, str) or not file:
@@ -495,7 +496,7 @@ def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: flo
         raise InputError(f"{label}: 'materials' must be a table of name = material, got {show(mapping)}")
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
     label = f"{label} {file}"
-    parts = load_mesh_file(base_dir / file, label, scale)
+    parts = load_mesh_file(base_dir / file, label, scale, warnings)
     vertices, material, matched = [], [], set()
     for part in parts:
         key = next((k for k in part.keys if k in mapped), None)

@@ -9,7 +9,7 @@ from lbl_illum.errors import InputError
 from lbl_illum.geometry import (
     PLANAR_TOLERANCE, SPHERE_MAX_DEVIATION, SPHERE_SUBDIVISIONS, box_triangles, degenerate_mask,
     duplicate_mask, load_mesh_file, polygon_triangles, rectangle_triangles, shape_from_table,
-    sphere_triangles, triangulate_polygon,
+    sphere_triangles,
 )
 
 DATA = Path(__file__).parent / "data" / "scene"
@@ -149,13 +149,6 @@ def test_polygon_refused(points, message):
 
 def test_polygon_planarity_tolerance():
     polygon_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.5 * PLANAR_TOLERANCE]])
-
-
-def test_triangulate_polygon_square():
-    index = triangulate_polygon(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float))
-    assert index.shape == (2, 3)
-    with pytest.raises(ValueError):
-        triangulate_polygon(np.array([[0, 0], [0, 1], [1, 1], [1, 0], [0.5, 0.5]], dtype=float))
 
 
 # -- shape tables ------------------------------------------------------------------
