@@ -140,14 +140,23 @@ def load_mesh_file(path: Path, where: str, scale: float = 1.0, warnings: list[st
     than three vertices are triangulated as drawn, holes and keyhole seams included
     (:mod:`lbl_illum.polygons`), not fanned; a face whose triangles' area differs from its
     polygon's by more than 0.1 %, or that has no area, is reported in ``warnings`` (a
-    list the messages are appended to).  A missing or unreadable file, or one without
-    triangles, is an :class:`InputError` starting with ``where``.
+    list the messages are appended to).  A Radiance scene file (``.rad``) gives its
+    surfaces, one part per modifier (:func:`lbl_illum.radfile.read_rad_surfaces`).  A
+    missing or unreadable file, or one without triangles, is an :class:`InputError`
+    starting with ``where``.
     """
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{where}: is a folder, not a geometry file ({path})")
     if not path.is_file():
         raise InputError(f"{where}: no such file ({path})")
+    if path.suffix.lower() in (".rad", ".mat"):
+        from .radfile import read_rad_surfaces
+
+        parts = read_rad_surfaces(path, where, scale, warnings)
+        if not parts:
+            raise InputError(f"{where}: the file contains no surfaces")
+        return parts
     _quiet_trimesh()
     try:
         scene = _load_trimesh_scene(path, where, scale, warnings)
@@ -222,8 +231,6 @@ def _read_obj(path: Path, where: str = "obj", scale: float = 1.0, warnings: list
 
 #: A face line of four or more vertices (``f a b c d ...``, each ``v``, ``v/t``, ``v//n`` or ``v/t/n``).
 _OBJ_POLYGON = re.compile(r"^[ \t]*f(?:[ \t]+[^\s#]+){4,}", re.M)
-#: Faces named one by one in a warning about triangulated areas; the rest are counted.
-_FACES_NAMED = 5
 
 
 def _triangulate_obj(text: str, where: str, scale: float, warnings: list[str] | None) -> str:
@@ -234,7 +241,7 @@ def _triangulate_obj(text: str, where: str, scale: float, warnings: list[str] | 
     the polygon's by more than :data:`~lbl_illum.polygons.AREA_TOLERANCE`, and faces of
     zero area (dropped), are reported in ``warnings`` by line, with both areas in m².
     Text without such faces is returned unchanged."""
-    from .polygons import AREA_TOLERANCE, triangulate_faces
+    from .polygons import area_warnings, triangulate_faces
 
     if not _OBJ_POLYGON.search(text):
         return text
@@ -277,22 +284,8 @@ def _triangulate_obj(text: str, where: str, scale: float, warnings: list[str] | 
     for (line, _, _), triangles in zip(polygons, out):
         lines[line] = "\n".join(triangles)
     if warnings is not None:
-        area_m2 = scale * scale
-        bad = result.mismatched(AREA_TOLERANCE)
-        empty = np.flatnonzero(result.polygon_area <= 0.0)
-        if len(bad):
-            named = "; ".join(f"line {polygons[f][0] + 1} ({len(polygons[f][1])} vertices): triangles "
-                              f"{result.triangle_area[f] * area_m2:.6g} m², polygon {result.polygon_area[f] * area_m2:.6g} m²"
-                              for f in bad[:_FACES_NAMED])
-            more = f"; and {len(bad) - _FACES_NAMED} more" if len(bad) > _FACES_NAMED else ""
-            warnings.append(f"{where}: {len(bad)} {'face' if len(bad) == 1 else 'faces'} whose triangles' area "
-                            f"differs from the polygon's by more than {100 * AREA_TOLERANCE:g} % (edges that "
-                            f"cross?): {named}{more}")
-        if len(empty):
-            named = ", ".join(str(polygons[f][0] + 1) for f in empty[:_FACES_NAMED])
-            more = f" and {len(empty) - _FACES_NAMED} more" if len(empty) > _FACES_NAMED else ""
-            warnings.append(f"{where}: dropped {len(empty)} {'face' if len(empty) == 1 else 'faces'} of zero area "
-                            f"(line {named}{more})")
+        warnings += area_warnings(result, where, lambda f: f"line {polygons[f][0] + 1} ({len(polygons[f][1])} "
+                                  "vertices)", scale * scale)
     return "\n".join(lines)
 
 

@@ -174,8 +174,7 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     sun, sky, warnings = daylight_from_dict(data, base_dir, where)
     warnings = material_warnings + warnings
     options = _options(_table(data, "settings", where, "[settings]"), f"{where}: [settings]", scale)
-    triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale,
-                          {m.name: i for i, m in enumerate(materials)}, warnings)
+    triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale, materials, warnings)
     used = set(np.unique(triangles.material).tolist())
     warnings += [f"{where}: [materials.{m.name}] is not used by any geometry"
                  for i, m in enumerate(materials) if i not in used]
@@ -426,13 +425,20 @@ class _Chunk:
     sphere: np.ndarray
 
 
-def _geometry(entries: Any, where: str, base_dir: Path, scale: float, ids: dict[str, int],
+def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials: list[Material],
               warnings: list[str]) -> Triangles:
-    """All triangles of the ``[[geometry]]`` entries, cleaned (see :func:`_assemble`)."""
+    """All triangles of the ``[[geometry]]`` entries, cleaned (see :func:`_assemble`).
+
+    Radiance files (``.rad``, ``.mat``) are read first, all of them, for their modifier
+    definitions: a modifier that no ``materials`` mapping and no ``[materials]`` table of
+    the same name gives a material becomes one (:func:`_radiance_materials`), appended to
+    ``materials``."""
     if entries is None:
         raise InputError(f"{where}: the scene has no geometry (add [[geometry]] entries)")
     if not isinstance(entries, (list, tuple)):
         raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {show(entries)}")
+    ids = {m.name: i for i, m in enumerate(materials)}
+    radiance = _radiance_files(entries, where, base_dir)
     chunks, centers, radii = [], [], []
     for i, entry in enumerate(entries):
         label = f"{where}: geometry[{i}]"
@@ -440,7 +446,11 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, ids: dict[
             raise InputError(f"{label}: must be a table, got {show(entry)}")
         if "file" in entry and "shape" in entry:
             raise InputError(f"{label}: give either 'file' or 'shape', not both")
-        if "file" in entry:
+        if i in radiance:
+            chunk = _radiance_chunk(entry, label, scale, ids, materials, radiance, i, warnings)
+            if chunk is not None:
+                chunks.append(chunk)
+        elif "file" in entry:
             chunks.append(_file_chunk(entry, label, base_dir, scale, ids, warnings))
         elif "shape" in entry:
             chunk, shape = _shape_chunk(entry, label, scale, ids, len(centers))
@@ -457,6 +467,79 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, ids: dict[
     triangles.sphere_center = np.array(centers, dtype=np.float64).reshape(-1, 3)
     triangles.sphere_radius = np.array(radii, dtype=np.float64)
     return triangles
+
+
+#: Suffixes of Radiance scene files, read by :mod:`lbl_illum.radfile`.
+RADIANCE_SUFFIXES = (".rad", ".mat")
+
+
+def _radiance_files(entries, where: str, base_dir: Path) -> dict:
+    """{entry index: (primitives, label)} of the entries that name Radiance files."""
+    from .radfile import read_rad
+
+    out = {}
+    for i, entry in enumerate(entries):
+        if isinstance(entry, Mapping) and isinstance(entry.get("file"), str) and "shape" not in entry \
+                and Path(entry["file"]).suffix.lower() in RADIANCE_SUFFIXES:
+            label = f"{where}: geometry[{i}]"
+            check_keys(entry, FILE_KEYS, label)
+            label = f"{label} {entry['file']}"
+            out[i] = (read_rad(base_dir / entry["file"], label), label)
+    return out
+
+
+def _radiance_chunk(entry, label: str, scale: float, ids: dict[str, int], materials: list[Material],
+                    radiance: dict, index: int, warnings: list[str]) -> _Chunk | None:
+    """A Radiance-file entry: its surfaces by modifier, each modifier's material the one
+    its ``materials`` mapping names, else the ``[materials]`` table of its name, else its
+    own definition in the scene's Radiance files (made a material here), else the entry's
+    default ``material``.  A ``.mat`` file (definitions only) gives no chunk."""
+    from .radfile import material_name, rad_surfaces
+
+    prims, where = radiance[index]
+    default = _material_id(entry["material"], label, ids) if "material" in entry else None
+    mapping = entry.get("materials", {})
+    if not isinstance(mapping, Mapping):
+        raise InputError(f"{label}: 'materials' must be a table of name = material, got {show(mapping)}")
+    mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
+    parts = rad_surfaces(prims, where, scale, warnings)
+    if not parts:
+        if Path(entry["file"]).suffix.lower() == ".mat" or any(p.kind != "polygon" for p in prims):
+            return None
+        raise InputError(f"{where}: the file contains no surfaces")
+    definitions = {p.name: (p, w) for prims_, w in radiance.values() for p in prims_}
+    # a part is named by its surfaces' modifier; patterns and aliases lead to a material
+    for part in parts:
+        part.material = material_name(part.name, definitions)
+    missing = list(dict.fromkeys(p.material for p in parts if not any(k in mapped or k in ids for k in p.keys)
+                                 and (default is None or p.material in definitions)))
+    if missing:
+        _radiance_materials(missing, definitions, where, ids, materials, warnings)
+    vertices, material = [], []
+    for part in parts:
+        key = next((k for k in part.keys if k in mapped), None)
+        mid = mapped[key] if key is not None else next((ids[k] for k in part.keys if k in ids), default)
+        vertices.append(part.vertices)
+        material.append(np.full(len(part.vertices), mid, dtype=np.int32))
+    _check_mapping_used(mapped, {k for p in parts for k in p.keys}, parts, where)
+    v = np.concatenate(vertices)
+    return _Chunk(where, v, np.concatenate(material), np.full(len(v), -1, dtype=np.int32))
+
+
+def _radiance_materials(names: list[str], definitions: dict, where: str, ids: dict[str, int],
+                        materials: list[Material], warnings: list[str]) -> None:
+    """Materials for the Radiance modifiers ``names`` from their definitions
+    (:func:`lbl_illum.radfile.material_tables`), appended to ``materials`` and ``ids``."""
+    from .radfile import material_tables
+
+    try:
+        tables = material_tables(definitions, names, warnings)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}" if not str(exc).startswith(where.split(":")[0]) else str(exc)) from None
+    for name, table in tables.items():
+        label = f"{where}: modifier '{name}'"
+        ids[name] = len(materials)
+        materials.append(material_from_table(name, table, label))
 
 
 def _material_id(name: Any, label: str, ids: dict[str, int]) -> int:
