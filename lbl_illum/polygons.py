@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FaceTriangles", "triangulate_faces", "triangulate_face", "AREA_TOLERANCE", "face_frame"]
+__all__ = ["FaceTriangles", "triangulate_faces", "triangulate_face", "AREA_TOLERANCE", "face_frame", "area_warnings"]
 
 #: Relative difference between a face's triangulated area and its polygon area above which
 #: the loader warns (0.1 %).
@@ -44,6 +44,8 @@ AREA_TOLERANCE = 1e-3
 MERGE_TOLERANCE = 1e-7
 #: Cross products below this fraction of the squared diameter count as zero.
 _EPS = 1e-12
+#: Faces named one by one in a warning about triangulated areas; the rest are counted.
+FACES_NAMED = 5
 
 
 @dataclass
@@ -67,6 +69,28 @@ class FaceTriangles:
         area = self.polygon_area
         diff = np.abs(self.triangle_area - area)
         return np.flatnonzero((diff > tolerance * np.maximum(area, 0.0)) & (area > 0.0))
+
+
+def area_warnings(result: FaceTriangles, where: str, face_label, area_scale: float = 1.0) -> list[str]:
+    """The loader's warnings about ``result``: faces whose triangles' area differs from the
+    polygon's by more than :data:`AREA_TOLERANCE` (edges that cross), and faces of zero
+    area (which give no triangles).  ``face_label(f)`` names face f (``"line 12 (5
+    vertices)"``); areas are reported in m² (``area_scale`` m² per unit²)."""
+    out = []
+    bad = result.mismatched(AREA_TOLERANCE)
+    if len(bad):
+        named = "; ".join(f"{face_label(f)}: triangles {result.triangle_area[f] * area_scale:.6g} m², polygon "
+                          f"{result.polygon_area[f] * area_scale:.6g} m²" for f in bad[:FACES_NAMED])
+        more = f"; and {len(bad) - FACES_NAMED} more" if len(bad) > FACES_NAMED else ""
+        out.append(f"{where}: {len(bad)} {'face' if len(bad) == 1 else 'faces'} whose triangles' area differs "
+                   f"from the polygon's by more than {100 * AREA_TOLERANCE:g} % (edges that cross?): {named}{more}")
+    empty = np.flatnonzero(result.polygon_area <= 0.0)
+    if len(empty):
+        named = ", ".join(face_label(f) for f in empty[:FACES_NAMED])
+        more = f" and {len(empty) - FACES_NAMED} more" if len(empty) > FACES_NAMED else ""
+        out.append(f"{where}: dropped {len(empty)} {'face' if len(empty) == 1 else 'faces'} of zero area: "
+                   f"{named}{more}")
+    return out
 
 
 def face_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -203,7 +203,7 @@ def test_obj_area_mismatch_is_a_warning_naming_the_face(tmp_path):
     assert len(warnings) == 2
     assert warnings[0].startswith("bad.obj: 1 face whose triangles' area differs")
     assert "line 10 (5 vertices)" in warnings[0] and "polygon 2 m²" in warnings[0]
-    assert warnings[1] == "bad.obj: dropped 1 face of zero area (line 11)"
+    assert warnings[1] == "bad.obj: dropped 1 face of zero area: line 11 (4 vertices)"
 
 
 def test_scene_reports_the_mismatch_and_keeps_keyhole_windows_open(tmp_path):
