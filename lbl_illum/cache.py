@@ -52,6 +52,13 @@ CACHE_FORMAT_VERSION = 2
 READABLE_VERSIONS = (1, 2)
 
 
+def _zones(zone, n: int) -> np.ndarray:
+    """(n,) uint8 query zones (0 for all when ``zone`` is None)."""
+    if zone is None:
+        return np.zeros(n, np.uint8)
+    return np.ascontiguousarray(zone, np.uint8).reshape(n)
+
+
 class LevelRecords:
     """The records of one diffuse level and their octree.
 
@@ -66,7 +73,9 @@ class LevelRecords:
     them, or use :meth:`set_values`; the next lookup uses the new values); and
     ``leak`` (n,) uint32, the sectors in which a record may not be used (see
     :func:`lbl_illum.hemisphere.leak_sectors`; ``W`` and ``leak`` are used only by an
-    ``anisotropic`` level); ``record_node`` (n,) int32, the octree node holding each record.  Octree nodes:
+    ``anisotropic`` level); ``zone`` (n,) uint8, the zone of each record (a record serves only
+    queries of its own zone: inside the windows of a building, or not; see
+    :meth:`lbl_illum.portals.PortalSet.zone`); ``record_node`` (n,) int32, the octree node holding each record.  Octree nodes:
     ``node_center`` (m, 3) [m], ``node_half`` (m,) [m], ``node_child`` (m, 8) int32.
     Lookups use the :class:`octree.Layout` made by :meth:`freeze`, redone after insertions.
 
@@ -96,6 +105,7 @@ class LevelRecords:
         # E, Gr (3 rows), Gt (3 rows) and, for elliptical domains, W per record
         self._values = np.zeros((capacity, 8 if anisotropic else 7, 3), np.float32)
         self.leak = np.zeros(capacity if anisotropic else 0, np.uint32)
+        self.zone = np.zeros(capacity, np.uint8)
         self.record_node = np.full(capacity, -1, np.int32)
         self._tree_version = 0
         self._frozen = None
@@ -147,7 +157,7 @@ class LevelRecords:
         if needed <= cap:
             return
         new = max(needed, cap + cap // 2)
-        for name in ("P", "N", "R", "_values", "leak", "record_node"):
+        for name in ("P", "N", "R", "_values", "leak", "zone", "record_node"):
             old = getattr(self, name)
             if len(old) == 0:
                 continue
@@ -183,10 +193,10 @@ class LevelRecords:
             if start < stop:
                 self._grow_nodes()
 
-    def add(self, P, N, R, E=None, Gr=None, Gt=None, W=None, leak=None) -> np.ndarray:
+    def add(self, P, N, R, E=None, Gr=None, Gt=None, W=None, leak=None, zone=None) -> np.ndarray:
         """Append records (E and the gradients default to zero, to be set once evaluated;
-        W and ``leak``, the domain's shape and leak sectors, to a round domain); return
-        their indices."""
+        W and ``leak``, the domain's shape and leak sectors, to a round domain; ``zone`` to
+        0); return their indices."""
         P = np.asarray(P, np.float64).reshape(-1, 3)
         k = len(P)
         start = self.count
@@ -200,6 +210,7 @@ class LevelRecords:
         if self.anisotropic:
             self.W[start:start + k] = 0.0 if W is None else W
             self.leak[start:start + k] = 0 if leak is None else leak
+        self.zone[start:start + k] = 0 if zone is None else zone
         self.count = start + k
         if k and self.accuracy > 0:
             if not np.all(self._contains(P)):
@@ -240,9 +251,10 @@ class LevelRecords:
             self._insert(0, count)
 
     # -- queries -----------------------------------------------------------------
-    def lookup(self, P, N, gradients: bool = False):
+    def lookup(self, P, N, gradients: bool = False, zone=None):
         """Interpolated irradiance at queries (Eq. 5); with ``gradients`` each record's
         value is first extrapolated to the query by its gradients (Ward & Heckbert 1992).
+        ``zone`` (n,) uint8 (default 0): each query is served by the records of its zone.
 
         Returns ``(E, weight_sum, count)``: (n, 3) float64, (n,) float64, (n,) int32;
         ``count == 0`` marks a query no record covers.  Each answer depends only on its
@@ -261,19 +273,19 @@ class LevelRecords:
             else:
                 order = np.arange(n)
             parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
-            octree.lookup(P, N, order, layout, self._values, self.leak, gradients, self.anisotropic, self.accuracy,
+            octree.lookup(P, N, _zones(zone, n), order, layout, self._values, self.leak, gradients, self.anisotropic, self.accuracy,
                           out_E, out_w, out_n, parallel)
         return out_E, out_w, out_n
 
-    def covers(self, P, N) -> np.ndarray:
-        """(n,) bool: whether any record serves each query — ``lookup(P, N)[2] > 0``,
+    def covers(self, P, N, zone=None) -> np.ndarray:
+        """(n,) bool: whether any record serves each query — ``lookup(P, N, zone=zone)[2] > 0``,
         found faster when most queries meet few records (:func:`octree.covered`)."""
         P = np.ascontiguousarray(P, np.float64).reshape(-1, 3)
         N = np.ascontiguousarray(N, np.float64).reshape(-1, 3)
         out = np.zeros(len(P), bool)
         if len(P) and self.count and self.accuracy > 0:
             parallel = len(P) >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
-            octree.covered(P, N, self.freeze(), self._values, self.leak, self.anisotropic, self.accuracy, out,
+            octree.covered(P, N, _zones(zone, len(P)), self.freeze(), self._values, self.leak, self.anisotropic, self.accuracy, out,
                            parallel)
         return out
 
@@ -283,7 +295,7 @@ class LevelRecords:
             self._frozen = None
             layout = octree.Layout(*octree.freeze(
                 self.count, self.n_nodes, self.record_node, self.node_child, self.node_center, self.node_half,
-                self.P, self.N, self.R, self.accuracy))
+                self.P, self.N, self.R, self.zone, self.accuracy))
             self._frozen = (self._tree_version, layout)
         return self._frozen[1]
 
@@ -291,7 +303,7 @@ class LevelRecords:
         """Bytes held per array (records, octree nodes, lookup layout), by name, counted
         as allocated (spare capacity included)."""
         out = {name: getattr(self, name).nbytes for name in
-               ("P", "N", "R", "leak", "record_node", "node_center", "node_half", "node_child")}
+               ("P", "N", "R", "leak", "zone", "record_node", "node_center", "node_half", "node_child")}
         out["E, Gr, Gt, W"] = self._values.nbytes
         if self._frozen is not None:
             for name, arr in self._frozen[1]._asdict().items():
@@ -302,7 +314,7 @@ class LevelRecords:
     def arrays(self) -> dict:
         """Copies of the record arrays that a cache file holds (``count`` rows each)."""
         n = self.count
-        names = ("P", "N", "E", "R", "Gr", "Gt") + (("W", "leak") if self.anisotropic else ())
+        names = ("P", "N", "E", "R", "Gr", "Gt", "zone") + (("W", "leak") if self.anisotropic else ())
         return {name: getattr(self, name)[:n].copy() for name in names}
 
 
@@ -364,7 +376,7 @@ class IrradianceCache:
             if n:
                 a = data.level(k)
                 shape = (a["W"], a["leak"]) if data.anisotropic else (None, None)
-                lv.add(a["P"], a["N"], a["R"], a["E"], a["Gr"], a["Gt"], *shape)
+                lv.add(a["P"], a["N"], a["R"], a["E"], a["Gr"], a["Gt"], *shape, zone=a.get("zone"))
             levels.append(lv)
         cache.levels = levels
         return cache
@@ -414,6 +426,8 @@ RECORD_ARRAYS = {"P": (np.float64, (3,)), "N": (np.float32, (3,)), "E": (np.floa
                  "Gr": (np.float32, (3, 3)), "Gt": (np.float32, (3, 3))}
 #: The arrays of levels with elliptical domains, in addition.
 SHAPE_ARRAYS = {"W": (np.float32, (3,)), "leak": (np.uint32, ())}
+#: Optional arrays (files written before them have none: zone 0 for every record).
+OPTIONAL_ARRAYS = {"zone": (np.uint8, ())}
 #: Most diffuse levels a file may hold.
 MAX_LEVELS = 1024
 
@@ -621,6 +635,16 @@ def _check_contents(data: CacheData, name: str) -> None:
                 bad(f"array {key} is {arr.dtype}{list(arr.shape)}, expected {np.dtype(dtype)}{[n, *shape]}")
             if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
                 bad(f"array {key} holds non-finite numbers")
+        for short, (dtype, shape) in OPTIONAL_ARRAYS.items():
+            key = f"L{k}_{short}"
+            arr = data.arrays.get(key)
+            if arr is None:
+                continue
+            names.add(key)
+            if arr.dtype != np.dtype(dtype) or arr.shape != (n,) + shape:
+                bad(f"array {key} is {arr.dtype}{list(arr.shape)}, expected {np.dtype(dtype)}{[n, *shape]}")
+            if short == "zone" and np.any(arr > 1):
+                bad(f"array {key} holds zones other than 0 and 1")
         if n and not np.all(data.arrays[f"L{k}_R"] > 0):
             bad(f"array L{k}_R holds radii <= 0")
         if n:
@@ -717,9 +741,9 @@ def record_settings(scene, options) -> dict:
     sky's and the sun's parameters, and the options that change the records' values or
     domains (``domains`` is ``elliptical`` for ``interpolation = "hessian"``, else
     ``round``).  Left out, because records stay valid when they change: the seed, the
-    spacing limits, the query points, the interpolation rule of round domains, and the
-    portals (portal glass and ``[[portals]]`` openings change how the light through a
-    window is sampled, not its expected value).
+    spacing limits, the query points and the interpolation rule of round domains.  The
+    portals are in the fingerprint (their zones decide which records serve which queries)
+    but not in this summary.
 
     Written to the header of cache files and compared with the current summary when a
     file is refused, to name what differs.  Plain JSON types (lists, not tuples).

@@ -283,6 +283,7 @@ studies:
   deep-room           window portals and unglazed openings on a deep room, with and without portals
   sky-component       sky component through roof and façade openings against an independent integral, 16 skies
   office-daylight     office DF against Radiance rtrace (overcast; clear sky with sun) and gensky's horizon blend
+  corpus              every preset on daylit interiors modelled by others, whole commands against references
 """
 
 
@@ -341,9 +342,13 @@ def _compute(scene, args, points, normals):
     if not args.quiet:
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+    integ = Integrator(scene, options)
+    if not args.quiet:
+        for note in integ.portal_notes():
+            print(f"lbl-illum: note: {note}", file=sys.stderr)
     bar = _ProgressBar(enabled=not args.quiet)
+    integ.progress = bar
     try:
-        integ = Integrator(scene, options, progress=bar)
         if args.cache:
             integ.attach_cache_file(args.cache, rebuild=args.rebuild_cache)
         result = integ.compute(points, normals)       # writes the cache file too

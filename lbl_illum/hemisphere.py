@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit, prange
 
 from .compiled import PARALLEL_MIN, serial_and_parallel
+from .lambert import lambert_edge
 
 __all__ = ["orthonormal_basis", "cell_counts", "stratified_directions", "cosine_directions", "irradiance_hessian",
            "irradiance_gradients", "limit_gradients"]
@@ -234,62 +235,6 @@ LEAK_SECTORS = 32
 
 
 @njit(cache=True, inline="always")
-def _add_edge(acc, coef, p, q, nx, ny, nz, tx, ty, tz, bx, by, bz):
-    """Irradiance term of one polygon edge and its derivatives in the tangent plane.
-
-    For an edge from r0 to r1 (vertex positions relative to the receiver, which has unit
-    normal n), Lambert's formula gives the edge's share of the projected solid angle,
-    f = ½ (n·c) I1 with c = r0 × r1 and I1 = ∫₀¹ |r0 + s e|⁻² ds = γ/|c| (γ the angle
-    between r0 and r1, e = r1 − r0).  Moving the receiver by x moves every r by −x, so
-    with I2 = ∫|r|⁻⁴, J2 = ∫ s|r|⁻⁴, I3 = ∫|r|⁻⁶, J3 = ∫ s|r|⁻⁶, K3 = ∫ s²|r|⁻⁶
-    (closed forms by the reduction ∫Q⁻ⁿ⁻¹ = ([(a s + b)/Qⁿ] + a(2n − 1)∫Q⁻ⁿ)/(2nΔ),
-    Q = a s² + 2 b s + c₀, Δ = a c₀ − b² = |c|²) and V2 = I2 r0 + J2 e, m = n × e:
-
-        ∇f  = ½ I1 m + (n·c) V2
-        ∇∇f = m V2ᵀ + V2 mᵀ − (n·c) I2 Id + 4 (n·c)(I3 r0 r0ᵀ + J3 (r0 eᵀ + e r0ᵀ) + K3 e eᵀ)
-
-    (the edge formulas of Schwarzhaupt, Jensen & Jarosz, "Practical Hessian-Based Error
-    Control for Irradiance Caching", SIGGRAPH Asia 2012, derived here).  Adds ``coef``
-    times f, ∇f·t, ∇f·b, t∇∇f t, t∇∇f b, b∇∇f b to ``acc`` for the edge from ``p`` to
-    ``q``; nothing for a degenerate edge or a zero ``coef``.
-    """
-    if coef == 0.0:
-        return
-    r0x, r0y, r0z, r1x, r1y, r1z = p[0], p[1], p[2], q[0], q[1], q[2]
-    ex, ey, ez = r1x - r0x, r1y - r0y, r1z - r0z
-    cx, cy, cz = r0y * r1z - r0z * r1y, r0z * r1x - r0x * r1z, r0x * r1y - r0y * r1x
-    D = cx * cx + cy * cy + cz * cz
-    a = ex * ex + ey * ey + ez * ez
-    c0 = r0x * r0x + r0y * r0y + r0z * r0z
-    c1 = r1x * r1x + r1y * r1y + r1z * r1z
-    if D <= 1e-24 * c0 * c1 or a <= 1e-30 * (c0 + c1):
-        return
-    b = ex * r0x + ey * r0y + ez * r0z
-    er1 = ex * r1x + ey * r1y + ez * r1z
-    sD = np.sqrt(D)
-    I1 = np.arctan2(sD, r0x * r1x + r0y * r1y + r0z * r1z) / sD
-    I2 = (er1 / c1 - b / c0 + a * I1) / (2.0 * D)
-    J2 = (0.5 * (1.0 / c0 - 1.0 / c1) - b * I2) / a
-    I3 = (er1 / (c1 * c1) - b / (c0 * c0) + 3.0 * a * I2) / (4.0 * D)
-    J3 = (0.25 * (1.0 / (c0 * c0) - 1.0 / (c1 * c1)) - b * I3) / a
-    K3 = (I2 - 2.0 * b * J3 - c0 * I3) / a
-    nc = nx * cx + ny * cy + nz * cz
-    mx, my, mz = ny * ez - nz * ey, nz * ex - nx * ez, nx * ey - ny * ex
-    # projections on the tangents
-    m_t, m_b = mx * tx + my * ty + mz * tz, mx * bx + my * by + mz * bz
-    r_t, r_b = r0x * tx + r0y * ty + r0z * tz, r0x * bx + r0y * by + r0z * bz
-    e_t, e_b = ex * tx + ey * ty + ez * tz, ex * bx + ey * by + ez * bz
-    v_t, v_b = I2 * r_t + J2 * e_t, I2 * r_b + J2 * e_b
-    acc[0] += coef * 0.5 * nc * I1
-    acc[1] += coef * (0.5 * I1 * m_t + nc * v_t)
-    acc[2] += coef * (0.5 * I1 * m_b + nc * v_b)
-    w = 4.0 * nc
-    acc[3] += coef * (2.0 * m_t * v_t - nc * I2 + w * (I3 * r_t * r_t + 2.0 * J3 * r_t * e_t + K3 * e_t * e_t))
-    acc[4] += coef * (m_t * v_b + v_t * m_b + w * (I3 * r_t * r_b + J3 * (r_t * e_b + e_t * r_b) + K3 * e_t * e_b))
-    acc[5] += coef * (2.0 * m_b * v_b - nc * I2 + w * (I3 * r_b * r_b + 2.0 * J3 * r_b * e_b + K3 * e_b * e_b))
-
-
-@njit(cache=True, inline="always")
 def _farthest(d0, v0, d1, v1, d2, v2):
     """The value of the farthest of three vertices (the first on ties)."""
     if d1 > d0 and d1 >= d2:
@@ -340,17 +285,17 @@ def _hessian(normals, directions, values, distances, far, out):
             kp = k + 1 if k + 1 < n else 0
             km = k - 1 if k > 0 else n - 1
             # spoke apex -> (0, k): + C(k-1), - C(k)
-            _add_edge(acc, cap[km] - cap[k], apex, hit[0, k], nx, ny, nz, tx, ty, tz, bx, by, bz)
+            lambert_edge(acc, cap[km] - cap[k], apex, hit[0, k], nx, ny, nz, tx, ty, tz, bx, by, bz)
             for j in range(m):
                 # ring edge (j, k) -> (j, k+1): + T1(j, k), - T2(j-1, k) (the cap above row 0)
                 coef = (t1[j, k] if j < m - 1 else 0.0) - (t2[j - 1, k] if j > 0 else cap[k])
-                _add_edge(acc, coef, hit[j, k], hit[j, kp], nx, ny, nz, tx, ty, tz, bx, by, bz)
+                lambert_edge(acc, coef, hit[j, k], hit[j, kp], nx, ny, nz, tx, ty, tz, bx, by, bz)
                 if j < m - 1:
                     # diagonal (j, k+1) -> (j+1, k): + T1(j, k), - T2(j, k)
-                    _add_edge(acc, t1[j, k] - t2[j, k], hit[j, kp], hit[j + 1, k], nx, ny, nz, tx, ty, tz,
+                    lambert_edge(acc, t1[j, k] - t2[j, k], hit[j, kp], hit[j + 1, k], nx, ny, nz, tx, ty, tz,
                               bx, by, bz)
                     # meridian (j, k) -> (j+1, k): + T2(j, k-1), - T1(j, k)
-                    _add_edge(acc, t2[j, km] - t1[j, k], hit[j, k], hit[j + 1, k], nx, ny, nz, tx, ty, tz,
+                    lambert_edge(acc, t2[j, km] - t1[j, k], hit[j, k], hit[j + 1, k], nx, ny, nz, tx, ty, tz,
                               bx, by, bz)
         sign = 1.0 if acc[0] >= 0.0 else -1.0    # the grid's orientation as seen from the receiver
         for c in range(6):
@@ -370,7 +315,7 @@ def irradiance_hessian(normals: np.ndarray, directions: np.ndarray, values: np.n
     vertex (across a depth step, the farther surface is the one a moving receiver
     uncovers).  The irradiance of that model and its first and second derivatives with
     respect to the receiver's position follow in closed form edge by edge
-    (:func:`_add_edge`): Schwarzhaupt, Jensen & Jarosz, "Practical Hessian-Based Error
+    (:func:`~lbl_illum.lambert.lambert_edge`): Schwarzhaupt, Jensen & Jarosz, "Practical Hessian-Based Error
     Control for Irradiance Caching", ACM TOG 31(6), 2012; Radiance 5 builds its record
     radii the same way.  Rays that reach the sky are hits at distance ``far``.
 

@@ -56,12 +56,14 @@ from numba import njit
 
 from .cache import IrradianceCache, LevelRecords
 from .direct import DirectLight
-from .hemisphere import (cell_counts, cosine_directions, hessian_radii, irradiance_gradients, irradiance_hessian,
-                         leak_sectors, limit_gradients, stratified_directions)
+from .hemisphere import (MAX_ANISOTROPY, cell_counts, cosine_directions, hessian_radii, irradiance_gradients,
+                         irradiance_hessian, leak_sectors, limit_gradients, orthonormal_basis, stratified_directions)
+from .lambert import portal_irradiance
 from .materials import GLASS, LIGHT, MIRROR, PLASTIC, PLASTIC_BRANCH_LIMIT, MaterialTable, russian_roulette
 from .options import Options
 from .placement import distance_bands, pick_per_cell
 from .photometry import luminance
+from .portals import build_portals
 from .geometry import TriangleSampler, Triangles
 from .raycast import SELF_HIT_EPSILON, Hits, Tracer
 from .scene import Scene
@@ -136,6 +138,14 @@ def _compact(keep, todo, P, N, band):
     return todo2, P2, N2, band2
 
 
+def _harmonic_mean_distance(first_t, r, S):
+    """(r,) R_0 of Eq. 4: the harmonic mean of each record's S first-hit distances (rays
+    to the sky count 1/∞ = 0; a record whose every ray escapes has R_0 = ∞)."""
+    inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
+    with np.errstate(divide="ignore"):
+        return np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
+
+
 @dataclass
 class RunStats:
     """What a calculation did."""
@@ -171,12 +181,26 @@ class IlluminanceResult:
         return luminance(self.rgb)
 
 
-def scene_fingerprint(scene: Scene, options: Options) -> str:
-    """Hash of everything the records depend on (not the seed, spacing or query points)."""
+#: Version of the rule that sizes records (part of the fingerprint: a cache file made
+#: with another rule is refused).  3: light limits from the portals in closed form
+#: inside, zones (docs/architecture.md, "Record domains").
+SIZING_VERSION = 3
+
+
+def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
+    """Hash of everything the records depend on (not the seed, spacing or query points):
+    the geometry, the materials, the daylight, the options that change records, the rule
+    that sizes them (:data:`SIZING_VERSION`) and the ``portals`` (a
+    :class:`~lbl_illum.portals.PortalSet`), whose zones decide which records serve which
+    queries."""
     h = hashlib.sha256()
     tri = scene.triangles
     for arr in (tri.vertices, tri.material, tri.sphere, tri.sphere_center, tri.sphere_radius):
         h.update(np.ascontiguousarray(arr).tobytes())
+    if portals is not None:
+        for arr in (portals.sampler.vertices, portals.outward, portals.enclosure):
+            if arr is not None:
+                h.update(np.ascontiguousarray(arr, np.float64).tobytes())
     desc = {
         "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance, m.model, m.panes, m.index)
                       + ((m.specularity, m.roughness) if m.kind == "plastic" else ())
@@ -187,8 +211,9 @@ def scene_fingerprint(scene: Scene, options: Options) -> str:
         "options": (options.ambient, [options.level_accuracy(k) for k in range(options.bounces + 1)],
                     [options.level_samples(k) for k in range(options.bounces + 1)]),
     }
-    if options.interpolation == "hessian":      # other record radii (2: with the known light's gradient limit)
-        desc["domains"] = "hessian-2"
+    desc["sizing"] = SIZING_VERSION
+    if options.interpolation == "hessian":      # other record radii
+        desc["domains"] = "hessian"
     h.update(json.dumps(desc, sort_keys=True).encode())
     return h.hexdigest()
 
@@ -243,19 +268,18 @@ class Integrator:
         self.sun = self.direct.sun
         #: limit each R_i by E/|∇_t E| of its known light (off only for comparisons)
         self.gradient_limit = True
-        # window portals (§5): the triangles of portal glass, then those of the scene's
-        # [[portals]] openings, which no other ray sees (their own tracer finds the openings
-        # a ray crosses, for the MIS weights)
-        portal_ids = np.flatnonzero(self.materials.portal[scene.triangles.material])
-        openings = np.asarray(scene.portals, np.float64).reshape(-1, 3, 3)
-        portal_vertices = np.concatenate([scene.triangles.vertices[portal_ids], openings])
-        self.portals = TriangleSampler(Triangles(portal_vertices, np.zeros(len(portal_vertices), np.int32),
-                                                 np.full(len(portal_vertices), -1, np.int32)),
-                                       np.arange(len(portal_vertices))) if len(portal_vertices) else None
+        # window portals (§5; lbl_illum.portals): portal glass first, then openings, which no
+        # other ray sees (their own tracer finds the openings a ray crosses, for the MIS weights)
+        self.portal_set = None if scene.sky.is_dark else build_portals(scene, self.tracer, self.materials,
+                                                                       find=scene.find_openings)
+        ps = self.portal_set
+        self.portals = ps.sampler if ps is not None else None
         #: per portal triangle: its scene triangle (portal glass), or -1 (an opening)
-        self._portal_prim = np.concatenate([portal_ids, np.full(len(openings), -1)]).astype(np.int64)
+        self._portal_prim = ps.prim if ps is not None else np.zeros(0, np.int64)
+        portal_ids = self._portal_prim[self._portal_prim >= 0]
         self._portal_index = np.full(len(scene.triangles), -1, np.int64)
         self._portal_index[portal_ids] = np.arange(len(portal_ids))
+        openings = self.portals.vertices[len(portal_ids):] if ps is not None else np.zeros((0, 3, 3))
         self._openings = None
         if len(openings):
             self._openings = Tracer(Triangles(openings, np.zeros(len(openings), np.int32),
@@ -277,13 +301,33 @@ class Integrator:
         self._plastic_fresnel = bool(np.any(self.materials.plastic_fresnel[used]))
         #: elliptical record domains from the Hessian (``interpolation = "hessian"``)
         self.hessian = self.options.interpolation == "hessian"
-        self.fingerprint = scene_fingerprint(scene, self.options)
+        self.fingerprint = scene_fingerprint(scene, self.options, self.portal_set)
         self.progress = progress
         B = self.options.bounces
         self.accuracies = [self.options.level_accuracy(k) for k in range(B + 1)]
         self.cache = cache
         if cache is not None and cache.fingerprint != self.fingerprint:
             raise ValueError("cache was made for another scene or other settings")
+
+    def _zone(self, P) -> np.ndarray:
+        """(n,) uint8 cache zone of each point (:meth:`lbl_illum.portals.PortalSet.zone`; 0 for
+        all without portals)."""
+        if self.portal_set is None:
+            return np.zeros(len(P), np.uint8)
+        return self.portal_set.zone(P)
+
+    def portal_notes(self) -> list[str]:
+        """What the user should hear of the portals: openings found in the geometry and
+        panes left out because no sky lies behind them (:mod:`lbl_illum.portals`)."""
+        ps = self.portal_set
+        if ps is None:
+            return []
+        notes = [f"unglazed opening found, sampled as a portal: {o.describe(self.scene.unit_scale, self.scene.units)} (find_openings = false to turn "
+                 "this off)" for o in ps.openings]
+        if ps.dropped:
+            notes.append(f"{ps.dropped} glass {'triangle is' if ps.dropped == 1 else 'triangles are'} not sampled as "
+                         "a portal: no sky behind them (portal = true on the material samples them anyway)")
+        return notes
 
     # -- bookkeeping ----------------------------------------------------------------
     def _tick(self, text=None):
@@ -341,7 +385,8 @@ class Integrator:
 
         ``through`` (n, 3) is each ray's starting throughput (default 1).
         ``portal_mis = (normals, S, n_p)`` marks rays from points that draw S cosine-
-        distributed hemisphere rays about ``normals`` (n, 3) and ``n_p`` portal samples:
+        distributed hemisphere rays about ``normals`` (n, 3) and ``n_p`` (a number, or one
+        per ray) portal samples:
         every ray gets the weight S p_h / (S p_h + n_p p_p) (see :meth:`_portal_samples`),
         p_p the portal density of its direction (:meth:`_portal_density`) — the openings
         it crosses before its first hit, plus the portal glass it goes through if its first
@@ -371,6 +416,7 @@ class Integrator:
         out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
         if portal_mis is not None:
             mis_normals, S, n_p = portal_mis[:3]
+            n_p = np.broadcast_to(np.asarray(n_p, np.float64), (n,))     # per ray (0: draws none)
             reach = portal_mis[3] if len(portal_mis) > 3 else None
         for depth in range(MAX_SPECULAR_DEPTH + 1):
             if len(ray) == 0:
@@ -386,7 +432,7 @@ class Integrator:
                         hits = Hits(hits.t[keep], hits.prim[keep])
                     # (ray = its index among the n rays at depth 0)
                     p_open = self._portal_density(d, hits.t, origins=o)
-                    mis_weight[ray] = self._hemisphere_weight(mis_normals[ray], d, p_open, S, n_p)
+                    mis_weight[ray] = self._hemisphere_weight(mis_normals[ray], d, p_open, S, n_p[ray])
             esc = np.flatnonzero(~hits.hit)
             if len(esc):
                 L = self.sky.luminance(d[esc])
@@ -446,7 +492,8 @@ class Integrator:
                 if len(through_portal):
                     sel = s_hit[through_portal]
                     density = p_open[sel] + self._portal_density(d[sel], hits.t[sel], prim=hits.prim[sel])
-                    mis_weight[ray[sel]] = self._hemisphere_weight(mis_normals[ray[sel]], d[sel], density, S, n_p)
+                    mis_weight[ray[sel]] = self._hemisphere_weight(mis_normals[ray[sel]], d[sel], density, S,
+                                                                   n_p[ray[sel]])
             unit = False
             ray = ray[s_hit][alive]
             o = self.tracer.offset(P[spec][alive], side[alive])
@@ -474,12 +521,18 @@ class Integrator:
         origins = np.repeat(base, S, axis=0)
         n_p = 0
         # portal samples add rays per record; on the one-ray paths of accuracy 0 below
-        # the first level they would make every path branch, so those go without
-        path_level = k > 0 and self.cache.levels[k].accuracy == 0.0
+        # the first level they would make every path branch, so those go without (with
+        # point samples, accuracy 0 gives the first reflection its full samples: portals)
+        path_level = k > 0 and samples == 1
+        inside = None
         if self.portals is not None and not path_level:
-            gx, gy = self.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
-            n_p = gx * gy
-        mis = (np.repeat(Ns, S, axis=0), S, n_p) if n_p else None
+            # only points behind the portals sample them (lbl_illum.portals)
+            inside = np.flatnonzero(self.portal_set.inside(P))
+            if len(inside):
+                gx, gy = self.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
+                n_p = gx * gy
+        per_ray = np.repeat(np.where(np.isin(np.arange(r), inside), n_p, 0), S) if n_p else None
+        mis = (np.repeat(Ns, S, axis=0), S, per_ray) if n_p else None
         first_t, radiance, hits, ray_mis = self.trace_paths(origins, dirs, rng, portal_mis=mis)
         known = (radiance * ray_mis[:, None]).reshape(r, S, 3).sum(axis=1)
         owner_local = hits["ray"] // S
@@ -494,8 +547,10 @@ class Integrator:
             pending.ray_dir.append(dirs.astype(np.float32))
             pending.cells = (m, n)
         if n_p:
-            p_known, p_hits, p_owner = self._portal_samples(P, Ns, Ng, S, n_p, rng, base)
-            known += p_known
+            p_known, p_hits, p_owner = self._portal_samples(P[inside], Ns[inside], Ng[inside], S, n_p, rng,
+                                                            base[inside])
+            known[inside] += p_known
+            p_owner = inside[p_owner]
             hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng")}
             hit_weight = np.concatenate([hit_weight, p_hits["weight"]])
             owner_local = np.concatenate([owner_local, p_owner])
@@ -518,44 +573,118 @@ class Integrator:
         pending.samples.append(np.full(r, S))
         if self.hessian and self.cache.levels[k].accuracy > 0:
             return self._hessian_domains(k, P, Ns, dirs, radiance, first_t, m, n)
-        inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
-        with np.errstate(divide="ignore"):
-            R0 = np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
+        R0 = _harmonic_mean_distance(first_t, r, S)
         if self.cache.levels[k].accuracy > 0 and self.gradient_limit:
-            R0 = np.minimum(R0, self._known_gradient_limit(Ns, dirs, radiance, first_t, m, n))
+            R0 = np.minimum(R0, self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n)[0])
         return self._clamp_radius(R0, P), None, None
 
-    def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n):
-        """Elliptical record domains from the Hessian of the light known at trace time
-        (``interpolation = "hessian"``; :func:`~lbl_illum.hemisphere.irradiance_hessian`).
+    def _light_limit(self, k, P, Ns, dirs, radiance, first_t, m, n):
+        """R_i ≤ E/|∇_t E| (Ward & Heckbert 1992) for the light that makes a room's
+        illuminance non-uniform, sized without the record's own samples of it.
 
-        The values are the luminance of the sky, ground and light seen along each ray
-        (what the levels below add is not known yet), scaled to a mean of 0.99 and raised
-        by 0.01 so that the geometry alone still shapes the domains where little light is
-        known — all 1 where none is (Radiance 5's rule).  Both radii are then limited by
-        E/|∇_t E| of the known light (:meth:`_known_gradient_limit`), as round domains
-        are.  The Hessian's own limit, R ≤ 1/|g · axis| with g taken from the same scaled
-        values, is much weaker where the known light is a small part of a record's
-        value; without the second limit the `low` preset was biased +1.0 % on the office
-        grid and +2.8 % over an image of the office (+7.4 % on the window wall), with it
-        −0.04 % and +0.0 % (+2.8 %) for 10–20 % more records (docs/rendering.md).
-        Returns (R, W, leak) with R the long radius.
+        A record's domain must not depend on the noise of its own value: where it does,
+        records that happened to catch more of a small bright source get smaller domains
+        and serve fewer queries than their neighbours that caught less, and interpolation
+        reads low (docs/architecture.md, "Record domains").  So for records behind the
+        windows (:meth:`lbl_illum.portals.PortalSet.inside`) E and ∇E are Lambert's closed
+        form for the portals, unoccluded (:func:`lbl_illum.lambert.portal_irradiance`),
+        with the interreflected light the bounces still to come add
+        (:meth:`_interreflected`) in E; elsewhere — the ground and the buildings outside,
+        lit by the open sky, whose estimate from the record's rays is not dominated by a
+        few of them — the light its rays found (:meth:`_known_gradient_limit`).
+
+        Returns ``(limit, terms, behind)``: (r,) [m]; the (r, 6) terms of Lambert's form
+        (E, gradient, Hessian; zero rows outside) for the Hessian's domains; (r,) bool, the
+        records behind the windows.
+        """
+        r = len(P)
+        behind = self.portal_set.inside(P) if self.portals is not None else np.zeros(r, bool)
+        terms = np.zeros((r, 6))
+        limit = np.full(r, np.inf)
+        if (~behind).any():
+            out = np.flatnonzero(~behind)
+            sel = (np.repeat(~behind, m * n))
+            limit[out] = self._known_gradient_limit(Ns[out], dirs[sel], radiance[sel], first_t[sel], m, n)
+        if behind.any():
+            terms[behind] = self._window_terms(P[behind], Ns[behind], k)
+            g = np.hypot(terms[behind, 1], terms[behind, 2])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                limit[behind] = np.where(g > 0, terms[behind, 0] / g, np.inf)
+        return limit, terms, behind
+
+    def _window_terms(self, P, Ns, k):
+        """(r, 6) the portals' light at records of level k: Lambert's E (plus the
+        interreflected estimate of :meth:`_interreflected`), its gradient and Hessian in
+        the tangent plane (:func:`lbl_illum.lambert.portal_irradiance`)."""
+        t = portal_irradiance(P, Ns, orthonormal_basis(Ns), self.portals.vertices, self._portal_luminance,
+                              self.portal_set.outward)
+        t[:, 0] += self._interreflected(k)
+        return t
+
+    def _interreflected(self, k) -> float:
+        """Estimate [lux] of the interreflected light in the value of a level-k record
+        inside: the split-flux average (Sumpner's law of the integrating sphere) over the
+        B − k bounces still to come, E = Φ ρ / A · (1 − ρ^(B−k)) / (1 − ρ), with Φ the
+        flux through the portals, A the area and ρ the mean diffuse reflectance of the
+        surfaces inside (:meth:`_inside_stats`).  It depends on the scene alone.  The
+        interreflected light varies little over a record's domain; counting it in E keeps
+        a window's gradient from shrinking the domains deep in a room, where most of the
+        light is interreflected."""
+        n = self.options.bounces - k
+        rho = self._inside_rho
+        if n <= 0 or rho <= 0:
+            return 0.0
+        first = self._inside_first_bounce
+        return first * (1.0 - rho ** n) / (1.0 - rho) if rho < 1.0 else first * n
+
+    def _inside_stats(self) -> tuple[float, float]:
+        """(Φ ρ / A [lux], ρ) of the inside zone (:meth:`_interreflected`): Φ = π Σ L_k A_k
+        over the portal triangles (luminance seen through each, :meth:`_portal_sources`),
+        A and ρ the area and the area-weighted diffuse reflectance of the triangles wholly
+        inside (:meth:`lbl_illum.portals.PortalSet.zone`)."""
+        tri = self.scene.triangles
+        inside = (self._zone(tri.vertices.reshape(-1, 3)).reshape(-1, 3) == 1).all(axis=1)
+        area = tri.areas[inside]
+        A = float(area.sum())
+        if A <= 0.0:
+            return 0.0, 0.0
+        rho = float((area * luminance(self.materials.diffuse_reflectance)[tri.material[inside]]).sum() / A)
+        flux = float(np.pi * (self._portal_luminance * self.portals.area).sum())
+        return flux * rho / A, rho
+
+    def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n):
+        """Elliptical record domains (``interpolation = "hessian"``): the Hessian radii of
+        Schwarzhaupt, Jensen & Jarosz (2012; :func:`~lbl_illum.hemisphere.hessian_radii`)
+        of the light that shapes the room, sized without the record's own samples of it,
+        as :meth:`_light_limit` explains: behind the windows the portals' light in closed
+        form, its E raised by the interreflected estimate, and the short radius at most
+        the harmonic mean distance R_0 of Eq. 4 (the long one 2 R_0), which the closed form
+        knows nothing of; elsewhere the Hessian of the light the record's rays found
+        (:func:`~lbl_illum.hemisphere.irradiance_hessian`: luminance scaled to a mean of
+        0.99 and raised by 0.01, all 1 where none is known, Radiance 5's rule).  Both
+        radii are then limited by :meth:`_light_limit` and clamped, and the leak sectors
+        found (:func:`~lbl_illum.hemisphere.leak_sectors`).  Returns (R, W, leak) with R
+        the long radius.
         """
         r, S = len(P), m * n
-        Y = luminance(radiance).reshape(r, S)
-        total = Y.sum(axis=1)
-        lit = total > 0.0
-        scale = np.where(lit, 0.99 * S / np.where(lit, total, 1.0), 0.0)
-        values = np.where(lit[:, None], Y * scale[:, None] + 0.01, 1.0).reshape(r, m, n)
-        terms = irradiance_hessian(Ns, dirs.reshape(r, m, n, 3), values, first_t.reshape(r, m, n),
-                                   HESSIAN_FAR * self.max_spacing)
         accuracy = self.cache.levels[k].accuracy
+        limit, terms, behind = self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n)
+        if (~behind).any():
+            out = np.flatnonzero(~behind)
+            Y = luminance(radiance).reshape(r, S)[out]
+            total = Y.sum(axis=1)
+            lit = total > 0.0
+            scale = np.where(lit, 0.99 * S / np.where(lit, total, 1.0), 0.0)
+            values = np.where(lit[:, None], Y * scale[:, None] + 0.01, 1.0).reshape(-1, m, n)
+            terms[out] = irradiance_hessian(Ns[out], dirs.reshape(r, m, n, 3)[out], values,
+                                            first_t.reshape(r, m, n)[out], HESSIAN_FAR * self.max_spacing)
         R_s, R_l, axis = hessian_radii(Ns, terms, accuracy)
-        # the known light's own gradient limit as well (module text, "Record radius")
-        limit = self._known_gradient_limit(Ns, dirs, radiance, first_t, m, n)
+        R0 = _harmonic_mean_distance(first_t, r, S)
+        R_s = np.where(behind, np.minimum(R_s, R0), R_s)
+        R_l = np.where(behind, np.minimum(R_l, 2.0 * R0), R_l)
         R_s, R_l = np.minimum(R_s, limit), np.minimum(R_l, limit)
         R_s = self._clamp_radius(R_s, P)
-        R_l = np.maximum(self._clamp_radius(R_l, P), R_s)
+        R_l = np.minimum(np.maximum(self._clamp_radius(R_l, P), R_s), MAX_ANISOTROPY * R_s)
         W = axis * np.sqrt(np.maximum((R_l / R_s) ** 2 - 1.0, 0.0))[:, None]
         leak = leak_sectors(Ns, dirs.reshape(r, S, 3), first_t.reshape(r, S), accuracy * R_s, accuracy * R_l,
                             axis, n)
@@ -581,6 +710,22 @@ class Integrator:
         with np.errstate(divide="ignore", invalid="ignore"):
             limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
         return limit
+
+    def _portal_sources(self):
+        """Per portal triangle, the luminance seen through it from the centre of the query
+        points' box: the sky (or ground glow) in the direction of the triangle's centroid,
+        times the glass's transmittance at that incidence (1 for an opening)."""
+        centre = 0.5 * (self._roi[0] + self._roi[1])
+        d = self.portals.vertices.mean(axis=1) - centre
+        d /= np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+        L = luminance(self.sky.luminance(d))
+        glass = self._portal_prim >= 0
+        if glass.any():
+            prim = self._portal_prim[glass]
+            cos = np.abs(np.einsum("ij,ij->i", self.tracer.normals[prim], d[glass]))
+            tau = self.materials.glass_transmittance(self.scene.triangles.material[prim], cos)
+            L[glass] *= luminance(tau)
+        return L
 
     def _portal_density(self, directions, t, prim=None, origins=None):
         """Solid-angle density [1/sr] of drawing ``directions`` by one portal sample.
@@ -746,8 +891,9 @@ class Integrator:
             stats.new_records[k] += nq
             self._tick()
             return pending, idx
+        zone = self._zone(P)
         if lv.count:
-            todo = np.flatnonzero(~lv.covers(P, Ns))
+            todo = np.flatnonzero(~lv.covers(P, Ns, zone))
         else:
             todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
@@ -764,7 +910,8 @@ class Integrator:
                 local = pick_per_cell(tP, tN, band, cell)
             pP, pN = tP[local], tN[local]
             R, W, leak = self._trace_records(k, pP, pN, Ng[todo[local]], pending, lv.count)
-            pending.records.append(lv.add(pP, pN, R, W=W, leak=leak))
+            pZ = zone[todo[local]]
+            pending.records.append(lv.add(pP, pN, R, W=W, leak=leak, zone=pZ))
             stats.new_records[k] += len(local)
             keep = np.ones(len(todo), bool)
             keep[local] = False
@@ -772,9 +919,9 @@ class Integrator:
                 # only this pass's records can cover what was uncovered before it
                 fresh = LevelRecords(lv.accuracy, lv.node_center[0], lv.node_half[0], capacity=len(local),
                                      anisotropic=lv.anisotropic)
-                fresh.add(pP, pN, R, W=W, leak=leak)
+                fresh.add(pP, pN, R, W=W, leak=leak, zone=pZ)
                 idx = np.flatnonzero(keep)
-                keep[idx[fresh.covers(tP[idx], tN[idx])]] = False
+                keep[idx[fresh.covers(tP[idx], tN[idx], zone[todo[idx]])]] = False
             todo, tP, tN, band = _compact(keep, todo, tP, tN, band)
             cell *= 0.5
             self._tick()
@@ -786,7 +933,7 @@ class Integrator:
         lv = self.cache.levels[k]
         if own_record is not None:
             return lv.E[own_record].astype(np.float64)
-        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper")
+        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper", zone=self._zone(P))
         return E
 
     def evaluate_level(self, k, pending: _Pending, next_answer):
@@ -954,6 +1101,8 @@ class Integrator:
         self.min_spacing = min(self.min_spacing, self.max_spacing)
         stats.min_spacing, stats.max_spacing = self.min_spacing, self.max_spacing
         self._roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
+        self._portal_luminance = self._portal_sources() if self.portals is not None else None
+        self._inside_first_bounce, self._inside_rho = self._inside_stats() if self.portals is not None else (0.0, 0.0)
 
         # what each level held before this run, to return to if it is interrupted
         start = [(lv.count, lv.node_center[0].copy(), float(lv.node_half[0])) for lv in self.cache.levels]

@@ -8,12 +8,14 @@ glass      thin pane (or two): specular transmission and reflection,    ``transm
            straight through, no refraction of the ray                   ``model``, ``panes``,
                                                                         ``refractive_index``,
                                                                         ``reflectance`` (constant model),
-                                                                        ``portal`` (true/false)
+                                                                        ``portal`` (auto/true/false)
 mirror     specular reflector                                           ``reflectance`` (0…1)
 plastic    Radiance's ``plastic``: a white specular part (Ward's          ``reflectance`` C (0…1),
            isotropic lobe, or a mirror when polished) over a Lambertian  ``specularity`` s (0…1),
            part of colour C                                             ``roughness`` α (0…1)
 light      Lambertian emitter, counted by the direct calculation only  ``luminance`` [cd/m²]
+opening    an unglazed opening: no ray sees the surface; the indirect  (none)
+           calculation samples its area like a window portal
 =========  ===========================================================  ==============================
 
 Scalars or ``[r, g, b]`` triples are accepted wherever a value may be coloured.
@@ -38,7 +40,8 @@ normal incidence; ``model`` says how it changes with the angle of incidence θ:
 ``portal = true`` marks a window whose area the indirect calculation samples directly
 (the paper's §5: large sources such as the sky seen through a window belong in the
 indirect step, sampled well); see :mod:`lbl_illum.integrator` and docs/windows.md.
-Glass is a portal by default (``DEFAULT_GLASS_PORTAL``).
+Glass is a portal by default where the sky lies behind it (``portal = "auto"``,
+:data:`DEFAULT_GLASS_PORTAL`; :mod:`lbl_illum.portals`).
 
 **Plastic.**  Radiance's ``plastic`` (``src/rt/normal.c``; Radiance reference manual,
 "Plastic"), with its arguments C = ``reflectance`` (RGB), s = ``specularity`` and
@@ -84,28 +87,33 @@ from .errors import InputError, check_keys, get_number, get_rgb, show
 from .hemisphere import orthonormal_basis
 from .photometry import luminance
 
-__all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "GLASS_INDEX",
+__all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING", "GLASS_INDEX",
            "GLAZING_MODELS", "DEFAULT_GLASS_PORTAL", "material_from_table", "thin_pane_reflectance",
            "fresnel_interfaces", "glazing_optics", "pane_transmissivity", "max_transmittance", "plastic_fresnel",
            "ward_brdf", "ward_pdf", "ward_sample", "russian_roulette", "POLISHED_ROUGHNESS2", "FRESNEL_THRESHOLD",
            "PLASTIC_BRANCH_LIMIT"]
 
-DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC = 0, 1, 2, 3, 4
-KIND_CODES = {"diffuse": DIFFUSE, "glass": GLASS, "mirror": MIRROR, "light": LIGHT, "plastic": PLASTIC}
+DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC, OPENING = 0, 1, 2, 3, 4, 5
+KIND_CODES = {"diffuse": DIFFUSE, "glass": GLASS, "mirror": MIRROR, "light": LIGHT, "plastic": PLASTIC,
+              "opening": OPENING}
 _KEYS = {
     "diffuse": ("type", "reflectance"),
     "glass": ("type", "transmittance", "reflectance", "portal", "model", "panes", "refractive_index"),
     "mirror": ("type", "reflectance"),
     "plastic": ("type", "reflectance", "specularity", "roughness"),
     "light": ("type", "luminance"),
+    "opening": ("type",),
 }
 #: Refractive index of window glass (soda-lime float glass in the visible; Radiance's RINDEX).
 GLASS_INDEX = 1.52
 #: Values of a glass's ``model``; the first is the default.
 GLAZING_MODELS = ("fresnel", "constant")
-#: Whether a glass is a window portal when its table does not say (see docs/windows.md
-#: for the deep-room measurement behind it).
-DEFAULT_GLASS_PORTAL = True
+#: Whether a glass is a window portal when its table does not say: ``"auto"``, a portal
+#: where the sky lies behind it (:mod:`lbl_illum.portals`; docs/windows.md has the
+#: measurements behind it).  ``true`` makes any pane a portal, ``false`` none.
+DEFAULT_GLASS_PORTAL = "auto"
+#: Values of a glass's ``portal`` key.
+PORTAL_MODES = (True, False, "auto")
 #: Smallest cosine of incidence used by the Fresnel formulas (a ray exactly in the plane
 #: of the pane is reflected whole).
 _MIN_COS = 1e-9
@@ -136,11 +144,11 @@ class Material:
     """
 
     name: str
-    kind: str                                   # "diffuse" | "glass" | "mirror" | "plastic" | "light"
+    kind: str                                   # "diffuse" | "glass" | "mirror" | "plastic" | "light" | "opening"
     reflectance: tuple = (0.0, 0.0, 0.0)        # ρ (diffuse, mirror, glass surface reflection), C (plastic)
     transmittance: tuple = (0.0, 0.0, 0.0)      # τ_n (glass, normal incidence)
     luminance: tuple = (0.0, 0.0, 0.0)          # emitted luminance [cd/m²] (light)
-    portal: bool = False                        # glass sampled by area in the indirect step
+    portal: bool | str = False                  # glass sampled by area in the indirect step: True, False, "auto"
     model: str = "fresnel"                      # glass: "fresnel" | "constant"
     panes: int = 1                              # glass (fresnel): 1 or 2 panes
     index: float = GLASS_INDEX                  # glass (fresnel): refractive index n
@@ -431,6 +439,8 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
         return Material(name, kind, reflectance=get_rgb(table, "reflectance", where, maximum=1.0))
     if kind == "light":
         return Material(name, kind, luminance=get_rgb(table, "luminance", where))
+    if kind == "opening":
+        return Material(name, kind)
     if kind == "plastic":
         return Material(name, kind, reflectance=get_rgb(table, "reflectance", where, maximum=1.0),
                         specularity=get_number(table, "specularity", where, minimum=0.0, maximum=1.0),
@@ -441,8 +451,8 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
 def _glass_from_table(name: str, table: Mapping[str, Any], where: str) -> Material:
     tau = get_rgb(table, "transmittance", where, maximum=1.0)
     portal = table.get("portal", DEFAULT_GLASS_PORTAL)
-    if not isinstance(portal, bool):
-        raise InputError(f"{where}: 'portal' must be true or false, got {show(portal)}")
+    if not (isinstance(portal, bool) or portal == "auto"):
+        raise InputError(f"{where}: 'portal' must be true, false or \"auto\", got {show(portal)}")
     model = table.get("model", GLAZING_MODELS[0])
     if not isinstance(model, str) or model not in GLAZING_MODELS:
         raise InputError(f"{where}: 'model' must be one of {', '.join(repr(m) for m in GLAZING_MODELS)}, "
@@ -490,7 +500,8 @@ class MaterialTable:
     reflectance: np.ndarray     # (m, 3) float64 (glass: normal incidence; plastic: its colour C)
     transmittance: np.ndarray   # (m, 3) float64 (glass: normal incidence)
     luminance: np.ndarray       # (m, 3) float64 [cd/m²]
-    portal: np.ndarray          # (m,) bool, glass sampled by area in the indirect step
+    portal: np.ndarray          # (m,) bool, glass that may be sampled by area in the indirect step
+    portal_forced: np.ndarray = None    # (m,) bool, glass that is (portal = true, not "auto")
     fresnel: np.ndarray = None          # (m,) bool, angle-dependent (Fresnel) glass
     panes: np.ndarray = None            # (m,) int8, panes of Fresnel glass
     index: np.ndarray = None            # (m,) float64, refractive index of Fresnel glass
@@ -528,16 +539,18 @@ class MaterialTable:
     @classmethod
     def from_materials(cls, materials: list[Material]) -> "MaterialTable":
         fresnel = np.array([m.fresnel for m in materials], dtype=bool)
+        kinds = np.array([m.code for m in materials], dtype=np.int8)
         tn = np.zeros((len(materials), 3))
         for i, m in enumerate(materials):
             if m.fresnel:
                 tn[i] = pane_transmissivity(np.array(m.transmittance, np.float64), m.index, m.panes)
         return cls(
-            kind=np.array([m.code for m in materials], dtype=np.int8),
+            kind=kinds,
             reflectance=np.array([m.reflectance for m in materials], dtype=np.float64).reshape(-1, 3),
             transmittance=np.array([m.transmittance for m in materials], dtype=np.float64).reshape(-1, 3),
             luminance=np.array([m.luminance for m in materials], dtype=np.float64).reshape(-1, 3),
-            portal=np.array([m.portal for m in materials], dtype=bool),
+            portal=np.array([m.portal is not False for m in materials], dtype=bool) & (kinds == GLASS),
+            portal_forced=np.array([m.portal is True for m in materials], dtype=bool) & (kinds == GLASS),
             fresnel=fresnel,
             panes=np.array([m.panes if m.fresnel else 1 for m in materials], dtype=np.int8),
             index=np.array([m.index if m.fresnel else GLASS_INDEX for m in materials], dtype=np.float64),

@@ -84,7 +84,8 @@ class Layout(NamedTuple):
 
     perm : (n_pad,) int32, the record index at each layout position (n_pad: records
         rounded up to a multiple of LANES)
-    pos : (3, n_pad) float64, P of ``perm`` by axis;  nr : (4, n_pad) float32, N and R
+    pos : (3, n_pad) float64, P of ``perm`` by axis;  nr : (5, n_pad) float32, N, R and the
+        record's zone (:meth:`lbl_illum.portals.PortalSet.zone`; -1 in padding)
     box : (g, 6, LANES) float32, groups of LANES sibling boxes, rows lo_x, lo_y, lo_z,
         hi_x, hi_y, hi_z
     level_start : (levels + 1,) int64, the groups of level l are ``level_start[l]:level_start[l + 1]``
@@ -270,7 +271,7 @@ def _record_order(count, n_nodes, rec_node, node_child, node_center, node_half, 
 
 
 @njit(cache=True)
-def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R, accuracy):
+def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R, zone, accuracy):
     """Lay records ``0:count`` out for lookups; return the fields of :class:`Layout`.
 
     Records go in :func:`_record_order`, in chunks of LANES (the last one padded with
@@ -286,8 +287,9 @@ def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R
     n_pad = n_chunks * LANES
     perm = np.zeros(n_pad, np.int32)
     pos = np.full((3, n_pad), np.nan)
-    nr = np.zeros((4, n_pad), np.float32)
+    nr = np.zeros((5, n_pad), np.float32)
     nr[3, :] = 1.0
+    nr[4, :] = -1.0
     for j in range(count):
         i = order[j]
         perm[j] = i
@@ -295,6 +297,7 @@ def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R
             pos[c, j] = P[i, c]
             nr[c, j] = N[i, c]
         nr[3, j] = R[i]
+        nr[4, j] = zone[i]
     # levels: boxes per level and the first group of each
     n_levels = 1
     k = n_chunks
@@ -374,7 +377,7 @@ def _sector_open(mask, dx, dy, dz, mx, my, mz, Ri):
     return (mask >> np.uint32(sector)) & np.uint32(1) == 0
 
 
-def _lookup(qP, qN, order, n_blocks, accuracy, gradients, shaped, V, leak, perm, pos, nr, box, level_start,
+def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, V, leak, perm, pos, nr, box, level_start,
             packet_extent, out_E, out_w, out_n):
     """Eq. 5 at each query ``order[k]``, the queries split into ``n_blocks`` runs (one
     per parallel task), each with its own buffers.
@@ -466,6 +469,7 @@ def _lookup(qP, qN, order, n_blocks, accuracy, gradients, shaped, V, leak, perm,
                 q = order[kq]
                 px, py, pz = qP[q, 0], qP[q, 1], qP[q, 2]
                 nx, ny, nz = qN[q, 0], qN[q, 1], qN[q, 2]
+                qz = np.float32(qZ[q])
                 xlo, xhi = _f32_below(px), _f32_above(px)
                 ylo, yhi = _f32_below(py), _f32_above(py)
                 zlo, zhi = _f32_below(pz), _f32_above(pz)
@@ -532,7 +536,7 @@ def _lookup(qP, qN, order, n_blocks, accuracy, gradients, shaped, V, leak, perm,
                         front = 0.5 * (dx * (nx + mx) + dy * (ny + my) + dz * (nz + mz))
                         hit_j[n_hit] = j
                         hit_w[n_hit] = 1.0 / max(err, MIN_ERROR)
-                        n_hit += (err < accuracy) & (front >= -FRONT_TOLERANCE * Ri) & ok
+                        n_hit += (err < accuracy) & (front >= -FRONT_TOLERANCE * Ri) & ok & (nr[4, j] == qz)
                     for c in range(n_hit):
                         j = hit_j[c]
                         w = hit_w[c]
@@ -581,7 +585,7 @@ def _lookup(qP, qN, order, n_blocks, accuracy, gradients, shaped, V, leak, perm,
 _lookup_kernels = serial_and_parallel(_lookup)
 
 
-def _covered(qP, qN, accuracy, shaped, V, leak, perm, pos, nr, box, level_start, out):
+def _covered(qP, qN, qZ, accuracy, shaped, V, leak, perm, pos, nr, box, level_start, out):
     """Compiled body of :func:`covered`: each query walks the box tree alone, depth
     first, and stops at the first record that serves it."""
     n_levels = level_start.shape[0] - 1
@@ -589,6 +593,7 @@ def _covered(qP, qN, accuracy, shaped, V, leak, perm, pos, nr, box, level_start,
     for q in prange(qP.shape[0]):
         px, py, pz = qP[q, 0], qP[q, 1], qP[q, 2]
         nx, ny, nz = qN[q, 0], qN[q, 1], qN[q, 2]
+        qz = np.float32(qZ[q])
         xlo, xhi = _f32_below(px), _f32_above(px)
         ylo, yhi = _f32_below(py), _f32_above(py)
         zlo, zhi = _f32_below(pz), _f32_above(pz)
@@ -619,7 +624,7 @@ def _covered(qP, qN, accuracy, shaped, V, leak, perm, pos, nr, box, level_start,
                     dz = pz - pos[2, j]
                     Ri = np.float64(nr[3, j])
                     d2 = dx * dx + dy * dy + dz * dz
-                    if not d2 <= (accuracy * Ri) ** 2 * (1.0 + 1e-9):
+                    if not d2 <= (accuracy * Ri) ** 2 * (1.0 + 1e-9) or nr[4, j] != qz:
                         continue                      # (NaN padding fails here too)
                     mx = np.float64(nr[0, j])
                     my = np.float64(nr[1, j])
@@ -645,21 +650,23 @@ def _covered(qP, qN, accuracy, shaped, V, leak, perm, pos, nr, box, level_start,
 _covered_kernels = serial_and_parallel(_covered)
 
 
-def covered(qP, qN, layout: Layout, V, leak, shaped, accuracy, out, parallel):
+def covered(qP, qN, qZ, layout: Layout, V, leak, shaped, accuracy, out, parallel):
     """Whether any record serves each query (``count > 0`` of :func:`lookup`, exactly).
 
     For placement, where most queries meet few records: each query walks the box tree
     on its own (no sort, no packets) and stops at the first record that passes Eqs. 5
     and 6 (elliptical, and outside its leak sectors, when ``shaped``).  ``out``: (q,) bool.
     """
-    _covered_kernels[bool(parallel)](qP, qN, accuracy, bool(shaped), V, leak, layout.perm, layout.pos, layout.nr,
+    _covered_kernels[bool(parallel)](qP, qN, qZ, accuracy, bool(shaped), V, leak, layout.perm, layout.pos, layout.nr,
                                      layout.box, layout.level_start, out)
 
 
-def lookup(qP, qN, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel):
+def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel):
     """Interpolate (Eq. 5) the records valid at each query on a :func:`freeze` layout.
 
     qP, qN : (q, 3) float64 query positions [m] and unit normals
+    qZ : (q,) uint8 zone of each query: only records of its zone serve it
+        (:meth:`lbl_illum.portals.PortalSet.zone`: inside the building's windows or not)
     order : (q,) int, the order in which to visit the queries (a permutation)
     V : (n, 8, 3) float32, by record: irradiance E_i (row 0), rotational gradient ∇_r E_i
         (rows 1–3, one per channel), translational gradient ∇_t E_i (rows 4–6) and the
@@ -682,6 +689,6 @@ def lookup(qP, qN, order, layout: Layout, V, leak, gradients, shaped, accuracy, 
     # a few blocks per thread: each block allocates its own buffers (the list of
     # level-1 boxes is sized for all of them)
     n_blocks = min(len(qP) // 256 + 1, 8 * numba.get_num_threads()) if parallel else 1
-    _lookup_kernels[bool(parallel)](qP, qN, order, n_blocks, accuracy, bool(gradients), bool(shaped), V, leak,
+    _lookup_kernels[bool(parallel)](qP, qN, qZ, order, n_blocks, accuracy, bool(gradients), bool(shaped), V, leak,
                                     layout.perm, layout.pos, layout.nr, layout.box, layout.level_start,
                                     float(layout.packet_extent), out_E, out_w, out_n)

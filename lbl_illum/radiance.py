@@ -269,6 +269,8 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
         if index == GLASS_INDEX:
             return f"void glass {rad_name}\n0\n0\n3 {_rgb(tn)}\n"
         return f"void glass {rad_name}\n0\n0\n4 {_rgb(tn)} {_g(index)}\n"
+    if material.kind == "opening":      # its faces are portals, not surfaces: nothing to write
+        return f"# {rad_name}: an opening (sampled as a portal, seen by no ray): no Radiance material\n"
     raise ValueError(f"unknown material kind {material.kind!r}")
 
 

@@ -679,9 +679,13 @@ def render_command(args, progress=None) -> int:
     if not quiet:
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+    integ = Integrator(scene, options)
+    if not quiet:
+        for note in integ.portal_notes():
+            print(f"lbl-illum: note: {note}", file=sys.stderr)
     bar = progress if progress is not None else _Bar(enabled=not quiet)
+    integ.progress = bar
     try:
-        integ = Integrator(scene, options, progress=bar)
         cache_file = _arg(args, "cache")
         if cache_file:
             try:

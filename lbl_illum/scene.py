@@ -58,7 +58,8 @@ __all__ = ["Scene", "load_scene", "scene_from_dict", "daylight_from_dict", "SCHE
 #: The scene-file schema this version reads.
 SCHEMA = 1
 #: Keys allowed at the top of a scene file.
-TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "site", "portals", "settings", "views")
+TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "site", "portals", "find_openings",
+                  "settings", "views")
 #: Keys of a ``[[portals]]`` entry.
 PORTAL_KEYS = ("vertices", "name")
 #: ``weather_values``: take the weather file's illuminances, or convert its irradiances.
@@ -83,6 +84,8 @@ class Scene:
     portals : (k, 3, 3) triangles [m] of the ``[[portals]]`` openings (invisible to rays;
         sampled by the indirect calculation like portal glass)
     views : the ``[views.NAME]`` tables as :class:`~lbl_illum.views.View` s (lengths in metres)
+    find_openings : look for unglazed openings in the geometry and sample them as portals
+        (:mod:`lbl_illum.openings`; the scene file's ``find_openings``, default true)
     """
 
     triangles: Triangles
@@ -96,6 +99,7 @@ class Scene:
     warnings: list[str] = field(default_factory=list)
     portals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
     views: dict = field(default_factory=dict)
+    find_openings: bool = True
 
     @property
     def material_table(self) -> MaterialTable:
@@ -179,10 +183,29 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     warnings += [f"{where}: [materials.{m.name}] is not used by any geometry"
                  for i, m in enumerate(materials) if i not in used]
     portals = _portals(data.get("portals"), where, scale)
+    triangles, portals = _opening_faces(triangles, materials, portals, where)
+    find_openings = data.get("find_openings", True)
+    if not isinstance(find_openings, bool):
+        raise InputError(f"{where}: 'find_openings' must be true or false, got {show(find_openings)}")
     views = _no_overflow(lambda: views_from_table(data.get("views"), where, scale), f"{where}: [views]",
                          "the views")
     return Scene(triangles=triangles, materials=materials, sky=sky, sun=sun, options=options,
-                 units=units, unit_scale=scale, warnings=warnings, portals=portals, views=views)
+                 units=units, unit_scale=scale, warnings=warnings, portals=portals, views=views,
+                 find_openings=find_openings)
+
+
+def _opening_faces(triangles: Triangles, materials: list[Material], portals: np.ndarray, where: str):
+    """Faces of the ``opening`` material: taken out of the traced geometry and added to the
+    portals (unglazed openings, sampled by area and seen by no ray)."""
+    opening = np.array([m.kind == "opening" for m in materials], bool)
+    if not opening.any():
+        return triangles, portals
+    mask = opening[triangles.material]
+    if mask.all():
+        raise InputError(f"{where}: every surface has an 'opening' material: nothing is left to light")
+    kept = Triangles(triangles.vertices[~mask], triangles.material[~mask], triangles.sphere[~mask],
+                     triangles.sphere_center, triangles.sphere_radius)
+    return kept, np.concatenate([portals, triangles.vertices[mask]])
 
 
 def _portals(entries: Any, where: str, scale: float) -> np.ndarray:

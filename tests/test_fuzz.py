@@ -557,7 +557,8 @@ def test_cache_loader_on_consistent_but_wrong_contents(cache_files, which, data)
                 else:
                     arr[row, data.draw(st.integers(0, 2))] = data.draw(st.sampled_from([-1e-6, -1.0, -1e30]))
             elif op == "entry" and arr.size:
-                values = [np.nan, np.inf, -1.0, 0.0, 1e30, -1e30, 1e-30] if arr.dtype.kind == "f" else [0, 1, 2 ** 32 - 1]
+                values = ([np.nan, np.inf, -1.0, 0.0, 1e30, -1e30, 1e-30] if arr.dtype.kind == "f"
+                          else [0, 1, int(np.iinfo(arr.dtype).max)])
                 arr.flat[data.draw(st.integers(0, arr.size - 1))] = data.draw(st.sampled_from(values))
             elif op == "truncate":
                 arrays[name] = arr[: data.draw(st.integers(0, len(arr)))]

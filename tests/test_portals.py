@@ -116,12 +116,13 @@ def test_known_light_gradient_limits_record_radius_near_a_window():
 
 
 # -- [[portals]]: openings without glass -------------------------------------------------------
-def open_roof_room(portals, glazed=False):
+def open_roof_room(portals, glazed=False, find=False):
     """The roof-light room with an empty 1 m hole (or its pane, ``glazed``) and the given
-    ``[[portals]]`` polygons (lists of vertices), built through a scene file's tables."""
+    ``[[portals]]`` polygons (lists of vertices), built through a scene file's tables;
+    ``find``: let the engine find the opening itself (``find_openings``)."""
     from lbl_illum.scene import scene_from_dict
 
-    data = {"geometry": [w for w in ROOM if glazed or w["material"] != "pane"],
+    data = {"find_openings": find, "geometry": [w for w in ROOM if glazed or w["material"] != "pane"],
             "materials": {"black": {"type": "diffuse", "reflectance": 0.0},
                           "pane": {"type": "glass", "model": "constant", "transmittance": TAU, "reflectance": 0.0,
                                    "portal": True}},

@@ -62,7 +62,8 @@ def deep_room(window: str = "glazed", portal: bool = True):
     """The deep room as a scene (built from the tables a scene file would hold).
 
     window : ``"glazed"`` (Fresnel glass, ``portal`` on the material) or ``"opening"``
-    (an empty hole; ``portal`` adds a ``[[portals]]`` polygon over it)."""
+    (an empty hole; ``portal`` adds a ``[[portals]]`` polygon over it, and without it the
+    engine is told not to look for openings in the geometry)."""
     x0, x1, z0, z1 = WINDOW
     geometry = [
         _rect([0, 0, 0], [WIDTH, 0, 0], [0, DEPTH, 0], "floor"),
@@ -86,6 +87,8 @@ def deep_room(window: str = "glazed", portal: bool = True):
     elif window == "opening":
         if portal:
             data["portals"] = [{"name": "window", "vertices": opening}]
+        else:                   # without any portal, also none found in the geometry
+            data["find_openings"] = False
     else:
         raise ValueError(f"window must be 'glazed' or 'opening', got {window!r}")
     return scene_from_dict(data, ".", f"deep-room ({window})")

@@ -162,15 +162,16 @@ def growth_exponents(points, records) -> list[float]:
     return [float(v) if np.isfinite(v) else math.nan for v in e]
 
 
-def uncovered_by(level: LevelRecords, count: int, P, N) -> np.ndarray:
+def uncovered_by(level: LevelRecords, count: int, P, N, zone=None) -> np.ndarray:
     """(n,) bool: positions no record among the first ``count`` of ``level`` covers
-    (Eqs. 5 and 6 with the level's a), looked up in a fresh octree of those records."""
+    (Eqs. 5 and 6 with the level's a, and the records' zones against ``zone``, default 0),
+    looked up in a fresh octree of those records."""
     P = np.asarray(P, np.float64).reshape(-1, 3)
     if count == 0 or len(P) == 0:
         return np.ones(len(P), bool)
     fresh = LevelRecords(level.accuracy, level.node_center[0], level.node_half[0], capacity=count)
-    fresh.add(level.P[:count], level.N[:count], level.R[:count])
-    _, _, hits = fresh.lookup(P, np.asarray(N, np.float64).reshape(-1, 3))
+    fresh.add(level.P[:count], level.N[:count], level.R[:count], zone=level.zone[:count])
+    _, _, hits = fresh.lookup(P, np.asarray(N, np.float64).reshape(-1, 3), zone=zone)
     return hits == 0
 
 
@@ -512,7 +513,9 @@ def _section_overlap(report, res, full, run_a, b_after_a, b_alone, b_seed, count
     covered = []
     for k in range(B + 1):
         P, N = b_after_a.new_positions(k)
-        covered.append(int(np.sum(~uncovered_by(b_after_a.cache.levels[k], counts_a[k], P, N))))
+        lv = b_after_a.cache.levels[k]
+        zone = lv.zone[counts_a[k]:lv.count]          # each new record's own zone
+        covered.append(int(np.sum(~uncovered_by(lv, counts_a[k], P, N, zone))))
     P0, _ = b_after_a.new_positions(0)
     new0_min_y = float(P0[:, 1].min()) if len(P0) else math.nan
     after = b_after_a.illuminance / b_alone.illuminance - 1.0
