@@ -35,6 +35,7 @@ STUDIES = {
     "deep-room": "deep_room",
     "sky-component": "sky_component",
     "office-daylight": "office_daylight",
+    "corpus": "corpus",
 }
 
 
