@@ -1,6 +1,8 @@
 """The pure parts of validation/bench/compare_radiance.py: Pareto fronts, time at equal
 error (log-log interpolation), the ratio verdicts, parsing of ``rad``, ``lookamb`` and
-worker output, the ladders and the run table.  Nothing here runs a benchmark."""
+worker output, the ladders and the run table; for the accuracy corpus the case names,
+its ladders, the report, and one cheap whole command (and one cheap Radiance run, when
+Radiance is installed) on a tiny scene.  Nothing here runs a benchmark."""
 
 from __future__ import annotations
 
@@ -291,3 +293,252 @@ def test_rad_presets_on_the_office(tmp_path):
                           env=programs["env"], capture_output=True, text=True, check=True).stdout
     cube = float(info.split()[-1])
     assert int(cr._arg(medium.args, "-ar")) == cr.ambient_resolution(32, cube, 13 / 3)
+
+
+# -- the accuracy corpus --------------------------------------------------------------------------
+def test_parse_scenes_corpus_cases():
+    from lbl_illum_studies import corpus_scenes
+
+    every = cr.parse_scenes("corpus")
+    assert len(every) == len(corpus_scenes.SCENES) * len(corpus_scenes.SKIES)
+    assert every[0] == "corpus:office-overcast" and all(cr.is_corpus(n) for n in every)
+    assert cr.parse_scenes("corpus:lbnl-open-office-overcast, corpus:cabin-sunny") == \
+        ["corpus:lbnl-open-office-overcast", "corpus:cabin-sunny"]
+    # a scene name gives both skies; names with hyphens are told apart from NAME-SKY
+    assert cr.parse_scenes("corpus:deep-room-opening") == ["corpus:deep-room-opening-overcast",
+                                                            "corpus:deep-room-opening-sunny"]
+    assert cr.parse_scenes("office,corpus:cabin-sunny,corpus:cabin,office") == \
+        ["office", "corpus:cabin-sunny", "corpus:cabin-overcast"]
+    assert not cr.is_corpus("office")
+    scene, sky = cr.corpus_case("deep-room-overcast")
+    assert scene.name == "deep-room" and sky == "overcast"
+    with pytest.raises(ValueError, match="unknown corpus case 'cabin-rainy'"):
+        cr.parse_scenes("corpus:cabin-rainy")
+    with pytest.raises(ValueError, match="unknown scene 'corpus-cabin'"):
+        cr.parse_scenes("corpus-cabin")
+
+
+def test_parse_args_takes_corpus_cases():
+    args = cr.parse_args(["--scenes", "corpus:deep-room-overcast", "--quick", "--run-timeout", "60"])
+    assert args.scene_list == ["corpus:deep-room-overcast"] and args.run_timeout == 60.0
+    with pytest.raises(SystemExit):
+        cr.parse_args(["--scenes", "corpus:nowhere-sunny"])
+
+
+def test_corpus_ladders():
+    ours = cr.corpus_engine_ladder()
+    assert [s.label for s in ours if s.family == "preset"] == [f"preset {p}" for p in ("draft", "low", "medium",
+                                                                                       "high")]
+    assert all(s.program == "lbl_illum" and s.args and not s.options for s in ours)
+    assert 6 <= len(ours) <= 8 and len({s.key for s in ours}) == len(ours)
+    (pure,) = [s for s in ours if s.family == "Monte Carlo"]
+    assert pure.args == ["--accuracy", "0", "--samples", "1024", "--point-samples", "0"]
+    assert 1 <= len(cr.corpus_engine_ladder(quick=True)) <= 2
+    cube, zone = 120.0, (4 + 12 + 3) / 3
+    theirs = cr.radiance_ladder(cr.CORPUS, cube=cube, zone_size=zone)
+    assert all(cr._arg(s.args, "-ab") == "9" and cr._arg(s.args, "-lw") == cr.LIMIT_WEIGHT for s in theirs)
+    cached = [s for s in theirs if cr._arg(s.args, "-aa") != "0"]
+    assert [(float(cr._arg(s.args, "-aa")), int(cr._arg(s.args, "-ad"))) for s in cached] == \
+        [(0.2, 512), (0.1, 1024), (0.1, 2048), (0.05, 2048), (0.05, 4096)]
+    assert all(int(cr._arg(s.args, "-as")) == int(cr._arg(s.args, "-ad")) // 2 for s in cached)
+    assert all(int(cr._arg(s.args, "-ar")) == cr.ambient_resolution(cr.AR_FACTOR, cube, zone) for s in cached)
+    pure = [s for s in theirs if cr._arg(s.args, "-aa") == "0"]
+    assert [cr._arg(s.args, "-ad") for s in pure] == ["1024", "4096", "16384"]
+    assert all("-as" not in s.args and "-ar" not in s.args for s in pure)
+    assert 1 <= len(cr.radiance_ladder(cr.CORPUS, cube=cube, zone_size=zone, quick=True)) <= 2
+
+
+def test_engine_command_is_what_a_user_types(tmp_path):
+    cmd = cr.engine_command(Path("s.toml"), Path("g.pts"), Path("o.csv"), Path("st.json"), ["--preset", "low"])
+    assert cmd[:3] == [sys.executable, "-m", "lbl_illum"]
+    assert cmd[3:] == ["illuminance", "s.toml", "--points", "g.pts", "-o", "o.csv", "--preset", "low",
+                       "--stats", "st.json", "-q"]
+    path = tmp_path / "out.csv"
+    path.write_text("x,y,z,nx,ny,nz,illuminance,direct,indirect,area\n1,1,0.8,0,0,1,101.5,1,100.5,floor\n"
+                    "2,1,0.8,0,0,1,7.25,0,7.25,\n")
+    assert cr.read_illuminance_csv(path).tolist() == [101.5, 7.25]
+    path.write_text("x,y,z,nx,ny,nz,illuminance,direct,indirect\n1,1,0.8,0,0,1,3,1,2\n")
+    assert cr.read_illuminance_csv(path).tolist() == [3.0]
+    path.write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match="no 'illuminance' column"):
+        cr.read_illuminance_csv(path)
+
+
+def test_case_verdict():
+    def c(verdict):
+        return {"verdict": verdict}
+
+    assert cr.case_verdict([c("met"), c("met"), c("n/a")]) == "met"
+    assert cr.case_verdict([c("met"), c("missed"), c("undetermined")]) == "missed"
+    assert cr.case_verdict([c("met"), c("undetermined"), c("n/a")]) == "undetermined"
+    assert cr.case_verdict([c("n/a"), c("n/a")]) == "n/a"
+
+
+def test_corpus_run_table_shows_both_parts_of_radiances_time():
+    runs = [
+        {"program": "lbl_illum", "family": "preset", "label": "preset draft", "seconds": 3.0, "process_seconds": 3.0,
+         "compute_seconds": 1.5, "maxrss_kib": 204800, "mean_error": 0.02, "max_error": 0.05, "bias": 0.01,
+         "records": 9047, "rays": 491342},
+        {"program": "radiance", "family": "-aa × -ad", "label": "-ab 9 -aa 0.2", "seconds": 2.5,
+         "process_seconds": 2.5, "oconv_seconds": 0.5, "rtrace_seconds": 2.0, "maxrss_kib": 10240,
+         "mean_error": 0.07, "max_error": 0.2, "bias": 0.01, "records": 2224, "rays": None},
+        {"program": "radiance", "family": "-aa 0 (Monte Carlo)", "label": "-aa 0", "failed": True,
+         "error": "stopped: over the time limit", "elapsed": 60.2},
+    ]
+    cr.front_pairs(runs, "lbl_illum")
+    cr.front_pairs(runs, "radiance")
+    header, rows = cr.corpus_run_table(runs)
+    assert all(len(r) == len(header) for r in rows)
+    assert rows[0][header.index("of which")] == "compute 1.5" and rows[0][header.index("front")] == "★"
+    assert rows[1][header.index("of which")] == "oconv 0.5 + rtrace 2"
+    assert rows[2][header.index("seconds")] == "stopped (time)" and rows[2][header.index("of which")] == "after 60.2 s"
+
+
+def test_prepare_corpus_skips_a_case_without_reference(tmp_path, monkeypatch):
+    corpus = cr.corpus_module()
+    monkeypatch.setattr(corpus, "reference_path", lambda scene, sky: tmp_path / f"{scene.name}-{sky}.json")
+    why = cr.prepare_corpus("cabin-sunny")
+    assert isinstance(why, str) and "no reference" in why and "cabin-sunny.json" in why
+
+
+TINY_SCENE = """\
+units = "m"
+
+[[geometry]]
+shape = "polygon"
+vertices = [[-10, -10, 0], [10, -10, 0], [10, 10, 0], [-10, 10, 0]]
+material = "ground"
+
+[[geometry]]
+shape = "box"
+center = [0, 0, 1]
+size = [2, 2, 2]
+material = "wall"
+
+[materials.ground]
+type = "diffuse"
+reflectance = 0.2
+
+[materials.wall]
+type = "diffuse"
+reflectance = 0.5
+
+[sky]
+type = "cie-overcast"
+horizontal_illuminance = 10000
+ground_reflectance = 0.2
+"""
+TINY_POINTS = "1.5 0 0.5 0 0 1 east\n-1.5 0 0.5 0 0 1 west\n0 1.5 0.5 0 0 1\n0 -1.5 0.5 0 0 1\n"
+
+
+@pytest.fixture
+def tiny_case(tmp_path):
+    """A corpus-like case on a 2 m box standing on a ground plane under an overcast sky:
+    four sensors beside it, and a made-up reference of 8000 lux each."""
+    import json
+
+    (tmp_path / "scene.toml").write_text(TINY_SCENE)
+    (tmp_path / "grid.pts").write_text(TINY_POINTS)
+    ref = tmp_path / "tiny-overcast.json"
+    ref.write_text(json.dumps({"illuminance": [8000.0] * 4, "standard_error": [8.0] * 4,
+                               "relative_standard_error": {"mean": 0.001, "max": 0.001}, "seeds": 4,
+                               "method": "made up", "estimator": {"point_samples": 16}}))
+    bench = cr.corpus_bench("tiny-overcast", "tiny", tmp_path / "scene.toml", tmp_path / "grid.pts", ref,
+                            {"role": "choose"})
+    return bench, tmp_path
+
+
+def test_corpus_bench_reads_the_reference(tiny_case, tmp_path):
+    bench, folder = tiny_case
+    assert bench.kind == cr.CORPUS and bench.reference.tolist() == [8000.0] * 4
+    assert bench.reference_info["standard_error_mean"] == 0.001 and bench.reference_info["role"] == "choose"
+    assert "made up" in bench.reference_info["method"] and "4 seeds" in bench.reference_info["method"]
+    assert bench.zone == (-1.0, 1.0, -1.0, 1.0, 0.0, 2.0)          # the box, not the ground
+    bad = folder / "bad.json"
+    bad.write_text('{"illuminance": [1, 2]}')
+    with pytest.raises(ValueError, match="2 reference values for 4 points"):
+        cr.corpus_bench("x", "x", folder / "scene.toml", folder / "grid.pts", bad)
+    bad.write_text('{"illuminance": [1, 2')                       # still being written
+    with pytest.raises(ValueError, match="unreadable reference"):
+        cr.corpus_bench("x", "x", folder / "scene.toml", folder / "grid.pts", bad)
+
+
+def test_run_command_times_the_whole_command(tiny_case):
+    """One cheap preset through the real command: values from its CSV, records and rays
+    from its stats, wall time from start to exit (more than the compute time)."""
+    bench, folder = tiny_case
+    runner = cr.Runner(bench, folder / "build", None, processes=2, timeout=120, memory_gib=4)
+    (setting,) = [s for s in cr.corpus_engine_ladder(quick=True) if s.label == "preset draft"]
+    row = runner.run_command(setting)
+    assert not row.get("failed"), row.get("error")
+    assert row["flags"] == ["--preset", "draft"] and "--preset draft" in row["command"]
+    assert len(row["illuminance"]) == 4 and all(1000 < v < 10000 for v in row["illuminance"])
+    err = np.array(row["illuminance"]) / 8000.0 - 1.0
+    assert row["mean_error"] == pytest.approx(np.mean(np.abs(err)), rel=1e-4)
+    assert row["bias"] == pytest.approx(np.mean(err), rel=1e-4, abs=1e-6)
+    assert row["records"] == sum(row["records_per_level"]) > 0 and row["rays"] > 0
+    assert row["settings"]["interpolation"] == "hessian" and row["settings"]["samples"] == 64
+    assert row["seconds"] == row["process_seconds"] > row["compute_seconds"] > 0
+    assert row["maxrss_kib"] > 10 * 1024
+    # a command that fails is a failed row, not an exception
+    broken = cr.Setting("lbl_illum", "options", "bad", args=["--accuracy", "-1"])
+    bad = runner.run_command(broken)
+    assert bad["failed"] and "exit code" in bad["error"]
+
+
+def test_radiance_time_on_a_corpus_case_adds_oconv(tiny_case):
+    from lbl_illum.radiance import radiance_programs
+
+    programs = radiance_programs()
+    if programs is None:
+        pytest.skip("needs Radiance's programs (pyradiance or oconv/rtrace on the PATH)")
+    bench, folder = tiny_case
+    runner = cr.Runner(bench, folder / "build", programs, processes=1, timeout=120, memory_gib=4)
+    setup = runner.prepare_radiance()
+    assert setup["oconv_seconds"] > 0 and setup["cube"] > 0
+    setting = cr.Setting("radiance", "-aa × -ad", "cheap", args=cr.rtrace_args(0.3, 64, 32, 2, 8))
+    row = runner.run_radiance(setting)
+    assert not row.get("failed"), row.get("error")
+    assert row["oconv_seconds"] == setup["oconv_seconds"] and row["rtrace_seconds"] > 0
+    assert row["seconds"] == pytest.approx(row["oconv_seconds"] + row["rtrace_seconds"])
+    assert len(row["illuminance"]) == 4 and all(1000 < v < 10000 for v in row["illuminance"])
+    assert row["records"] is None or row["records"] > 0
+
+
+def test_corpus_report_has_a_section_and_a_summary(tiny_case, tmp_path):
+    import json
+
+    bench, folder = tiny_case
+    runs = [
+        {"program": "lbl_illum", "family": "preset", "label": "preset draft", "seconds": 2.0, "process_seconds": 2.0,
+         "compute_seconds": 0.5, "maxrss_kib": 204800, "mean_error": 0.015, "max_error": 0.03, "bias": 0.01,
+         "records": 100, "rays": 1000},
+        {"program": "lbl_illum", "family": "preset", "label": "preset high", "seconds": 8.0, "process_seconds": 8.0,
+         "compute_seconds": 6.0, "maxrss_kib": 204800, "mean_error": 0.004, "max_error": 0.01, "bias": 0.001,
+         "records": 900, "rays": 9000},
+        {"program": "radiance", "family": "-aa × -ad", "label": "-aa 0.2", "seconds": 5.0, "process_seconds": 5.0,
+         "oconv_seconds": 0.1, "rtrace_seconds": 4.9, "maxrss_kib": 10240, "mean_error": 0.06, "max_error": 0.1,
+         "bias": 0.0, "records": 50, "rays": None},
+        {"program": "radiance", "family": "-aa × -ad", "label": "-aa 0.05", "seconds": 50.0,
+         "process_seconds": 50.0, "oconv_seconds": 0.1, "rtrace_seconds": 49.9, "maxrss_kib": 10240,
+         "mean_error": 0.008, "max_error": 0.03, "bias": 0.0, "records": 500, "rays": None},
+    ]
+    ours, theirs = cr.front_pairs(runs, "lbl_illum"), cr.front_pairs(runs, "radiance")
+    comparison = [cr.compare_at(ours, theirs, e) for e in cr.CORPUS_ERROR_LEVELS]
+    res = {"runs": runs, "comparison": {"command": comparison}, "verdict": cr.case_verdict(comparison),
+           "radiance_setup": {"version": "RADIANCE test", "export_seconds": 0.1, "oconv_seconds": 0.1, "cube": 20.0,
+                              "mesh": False, "ar": 80}}
+    assert res["verdict"] == "met"               # 5 %, 2 %: ours ≤ 2 s; 1 %: both interpolated; 0.5 %: n/a
+    args = SimpleNamespace(out_display="OUT", scenes_given=True, scenes="corpus:tiny-overcast", quick=False,
+                           run_timeout=cr.RUN_TIMEOUT, processes=2, memory_limit=6.0)
+    folder_out = cr.write_report(tmp_path / "out", [bench], {bench.name: res}, args, {"bin": {}}, 1.0,
+                                 skipped={"cabin-sunny": "no reference yet"})
+    assert folder_out.name == cr.CORPUS_NAME
+    md = (folder_out / "report.md").read_text()
+    assert "| tiny-overcast | choose | 0.10 % |" in md and "| met |" in md
+    assert "skipped: no reference yet" in md and "Radiance not reached" in md
+    assert "oconv 0.1 + rtrace 4.9" in md and (folder_out / "tiny-overcast-front.png").is_file()
+    doc = json.loads((folder_out / "results.json").read_text())["results"]
+    assert doc["corpus_verdicts"] == {"tiny-overcast": "met"} and doc["corpus_skipped"] == {"cabin-sunny":
+                                                                                              "no reference yet"}
+    assert doc["corpus"]["tiny-overcast"]["runs"][0]["compute_seconds"] == 0.5

@@ -26,6 +26,22 @@ and by how much?*
   recomputes it) together with a cross-check against a converged Radiance run
   (``RADIANCE_CHECK``: ``-aa 0``, pure Monte Carlo).
 
+* the accuracy corpus (``validation/studies/corpus_scenes.py``: eight scenes, the deep room twice,
+  each under an overcast sky and a sunny hour): ``corpus`` takes every case,
+  ``corpus:NAME`` both skies of one scene, ``corpus:NAME-SKY`` one case (e.g.
+  ``corpus:lbnl-open-office-overcast,corpus:cabin-sunny``).  Reference: the case's
+  ``validation/data/corpus/NAME-SKY.json`` (pure Monte Carlo over independent seeds,
+  ``validation/corpus_reference.py``); a case without one is skipped and listed.  Here
+  both sides are what a user waits for: ours is the whole command
+  ``python -m lbl_illum illuminance SCENE --points PTS -o OUT.csv FLAGS --stats S.json -q``
+  from start to exit (``CORPUS_ENGINE_LADDER``: the four presets, two explicit
+  ``--accuracy --samples --point-samples`` settings and pure Monte Carlo; one untimed
+  run per case first), Radiance's is ``oconv`` plus ``rtrace -ab 9 …``
+  (``RADIANCE_LADDERS["corpus"]``: five (-aa, -ad) pairs, ``-aa 0`` at three -ad).
+  Compared at ``CORPUS_ERROR_LEVELS`` (5 %, 2 %, 1 %, 0.5 %); a run on corpus cases
+  only writes ``OUT/radiance-comparison-corpus/`` (``CORPUS_NAME``), so it leaves the
+  classic scenes' report alone.
+
 **Ladders** (``ENGINE_LADDERS``, ``RADIANCE_LADDERS``, ``RAD_PRESETS``; shorter on the
 furnished office, where a run costs about ten office runs).  lbl_illum: the presets
 (draft … high), a grid over ``accuracy`` and ``samples``, ``point_samples``, the paper's
@@ -76,10 +92,13 @@ Usage (from the repository root)::
     python validation/bench/compare_radiance.py [--out docs/performance]
         [--scenes office,sphere-plane,furnished] [--quick] [--list]
         [--triangles 1000000] [--remake-reference] [--memory-limit 6]
+    python validation/bench/compare_radiance.py --scenes corpus [--run-timeout 1200]
 
 writes ``OUT/radiance-comparison/`` (report.md, report.html, one plot per scene,
-results.json), whole or not at all.  ``--quick``: two or three settings per program on
-the office only (under a minute on an idle machine; the full run about two hours).  ``--list``: print the ladders and exit.  Without
+results.json; ``radiance-comparison-corpus/`` for corpus cases only), whole or not at
+all.  ``--quick``: two or three settings per program on the office only, or two per
+program on the corpus cases named (under a minute on an idle machine; the full run
+about two hours, the whole corpus several more).  ``--list``: print the ladders and exit.  Without
 ``pyradiance`` (or ``oconv`` and ``rtrace`` on the PATH) only our side runs, and the
 report says so.
 """
@@ -148,6 +167,14 @@ RADIANCE_CHECK = ["-ab", str(REFERENCE_BOUNCES + 1), "-aa", "0", "-ad", "16384",
 #: its child processes), before it is stopped and reported as failed.
 RUN_TIMEOUT = 2700.0
 MEMORY_LIMIT_GIB = 6.0
+#: The accuracy corpus (``validation/studies/corpus_scenes.py``): ``--scenes corpus`` takes
+#: every case, ``corpus:NAME`` both skies of one scene, ``corpus:NAME-SKY`` one case.
+CORPUS = "corpus"
+CORPUS_PREFIX = CORPUS + ":"
+#: Mean relative errors at which the corpus cases are compared.
+CORPUS_ERROR_LEVELS = (0.05, 0.02, 0.01, 0.005)
+#: Report folder of a run on corpus cases only (the classic scenes' stays NAME).
+CORPUS_NAME = NAME + "-corpus"
 
 
 # ---------------------------------------------------------------------------
@@ -160,7 +187,8 @@ class Setting:
 
     program : ``"lbl_illum"`` or ``"radiance"``;  family : group in tables and plots
     label : what the table shows;  options : lbl_illum: ``Options`` fields;
-    args : Radiance: the rtrace options (ambient and others) before the octree
+    args : Radiance: the rtrace options (ambient and others) before the octree;
+    lbl_illum on corpus cases: the quality flags of ``lbl-illum illuminance``
     """
 
     program: str
@@ -173,7 +201,7 @@ class Setting:
     def key(self) -> str:
         """What makes two settings the same run."""
         if self.program == "lbl_illum":
-            return "lbl_illum " + json.dumps(self.options, sort_keys=True)
+            return "lbl_illum " + json.dumps(self.options, sort_keys=True) + "".join(" " + a for a in self.args)
         return "radiance " + " ".join(self.args)
 
 
@@ -289,14 +317,18 @@ RADIANCE_LADDERS = {
                   "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096)},
     "sphere-plane": {"ab": 1, "pairs": [(aa, ad) for aa in (0.2, 0.1, 0.05) for ad in (256, 1024, 4096)],
                      "as0": (1024,), "ab_ladder": (), "ar_ladder": (2, 32), "pure": (256, 1024, 4096, 16384)},
+    # corpus cases: -ab 9 = our 8 bounces (the sky is Radiance's first); kept to 8 runs a case
+    CORPUS: {"ab": 9, "pairs": [(0.2, 512), (0.1, 1024), (0.1, 2048), (0.05, 2048), (0.05, 4096)],
+             "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096, 16384)},
 }
-QUICK_RADIANCE_PAIRS = {"sphere-plane": [(0.2, 256), (0.1, 1024)]}
+QUICK_RADIANCE_PAIRS = {"sphere-plane": [(0.2, 256), (0.1, 1024)], CORPUS: [(0.2, 512), (0.1, 1024)]}
 QUICK_RADIANCE_DEFAULT = [(0.3, 256), (0.1, 1024)]
 #: ``rad`` presets per kind of scene: (QUALITY, INDIRECT); LOW takes no INDIRECT.
 RAD_PRESETS = {
     "office": [("LOW", 2), ("MEDIUM", 2), ("MEDIUM", 5), ("HIGH", 2), ("HIGH", 5)],
     "furnished": [("LOW", 2), ("MEDIUM", 2), ("MEDIUM", 5)],
     "sphere-plane": [],
+    CORPUS: [],
 }
 QUICK_RAD_PRESETS = [("MEDIUM", 2)]
 #: The -ar factor f of every run not on the -ar ladder.
@@ -331,6 +363,57 @@ def radiance_ladder(kind: str, cube: float, zone_size: float, quick: bool = Fals
     for ad in ladder["pure"]:
         add("-aa 0 (Monte Carlo)", rtrace_args(0.0, ad, None, ab))
     return dedupe(out)
+
+
+#: Our ladder on corpus cases, as ``lbl-illum illuminance`` flags: the presets, explicit
+#: (accuracy, samples, point samples) below and above them (the command's defaults
+#: otherwise: gradients interpolation, 8 bounces), pure Monte Carlo samples.
+CORPUS_ENGINE_LADDER = {"presets": ("draft", "low", "medium", "high"),
+                        "explicit": [(0.2, 64, 512), (0.08, 256, 4096)], "pure": (1024,)}
+QUICK_CORPUS_ENGINE_LADDER = {"presets": ("draft", "medium"), "explicit": [], "pure": ()}
+#: Cheap settings of the other kinds run untimed before the first corpus case, so that no
+#: timed run compiles a kernel (numba's on-disk cache) whatever the first setting is.
+CORPUS_PRIMERS = (["--accuracy", "0.3", "--samples", "16", "--point-samples", "16"],
+                  ["--accuracy", "0", "--samples", "16", "--point-samples", "0"])
+
+
+def explicit_flags(accuracy: float, samples: int, point_samples: int) -> list[str]:
+    """``lbl-illum illuminance`` quality flags of an explicit setting."""
+    return ["--accuracy", f"{accuracy:g}", "--samples", str(samples), "--point-samples", str(point_samples)]
+
+
+def corpus_engine_ladder(quick: bool = False) -> list[Setting]:
+    """Our settings on a corpus case: each the quality flags of one whole command
+    (:func:`engine_command`)."""
+    ladder = QUICK_CORPUS_ENGINE_LADDER if quick else CORPUS_ENGINE_LADDER
+    out = [Setting("lbl_illum", "preset", f"preset {p}", args=["--preset", p]) for p in ladder["presets"]]
+    for a, s, ps in ladder["explicit"]:
+        flags = explicit_flags(a, s, ps)
+        out.append(Setting("lbl_illum", "options", " ".join(flags), args=flags))
+    for s in ladder["pure"]:
+        flags = explicit_flags(0.0, s, 0)
+        out.append(Setting("lbl_illum", "Monte Carlo", " ".join(flags) + " (Monte Carlo)", args=flags))
+    return dedupe(out)
+
+
+def engine_command(scene: Path, points: Path, output: Path, stats: Path, flags: Sequence[str]) -> list[str]:
+    """The whole command a user types: ``python -m lbl_illum illuminance SCENE --points
+    PTS -o OUT.csv FLAGS --stats STATS.json -q``."""
+    return [sys.executable, "-m", "lbl_illum", "illuminance", str(scene), "--points", str(points), "-o",
+            str(output), *flags, "--stats", str(stats), "-q"]
+
+
+def read_illuminance_csv(path: Path) -> np.ndarray:
+    """Column ``illuminance`` [lux] of the command's CSV output
+    (``x,y,z,nx,ny,nz,illuminance,direct,indirect[,area]``)."""
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.reader(f))
+    if not rows or "illuminance" not in rows[0]:
+        raise ValueError(f"{Path(path).name}: no 'illuminance' column in the header")
+    k = rows[0].index("illuminance")
+    return np.array([float(r[k]) for r in rows[1:] if r], float)
 
 
 def dedupe(settings: Sequence[Setting]) -> list[Setting]:
@@ -865,6 +948,86 @@ def prepare_furnished(build: Path, triangles: int, remake: bool, minutes: float,
                  zone=room_zone(scene.triangles, points))
 
 
+def corpus_module():
+    """``lbl_illum_studies.corpus_scenes`` (the corpus's scenes, skies and references)."""
+    from lbl_illum_studies import corpus_scenes
+
+    return corpus_scenes
+
+
+def corpus_case_names() -> list[str]:
+    """Every corpus case, ``NAME-SKY``, in the corpus's order."""
+    return [f"{scene.name}-{sky}" for scene, sky in corpus_module().cases()]
+
+
+def corpus_case(case: str):
+    """(CorpusScene, sky) of case ``NAME-SKY``; ValueError naming an unknown one."""
+    corpus = corpus_module()
+    for scene, sky in corpus.cases():
+        if case == f"{scene.name}-{sky}":
+            return scene, sky
+    raise ValueError(f"--scenes: unknown corpus case {case!r} (cases are NAME-SKY: "
+                     f"{', '.join(corpus_case_names())})")
+
+
+def corpus_bench(name: str, title: str, scene_path: Path, points_path: Path, reference_file: Path,
+                 info: dict | None = None) -> Bench:
+    """A corpus case as a :class:`Bench`: the scene and points files as the command
+    reads them and the reference of ``reference_file`` (``illuminance`` per point [lux],
+    ``standard_error``, ``relative_standard_error``, ``seeds``, ``method``, ``estimator``).
+    ValueError when the reference is unreadable or does not match the points."""
+    from lbl_illum import load_scene, read_points
+
+    scene = load_scene(scene_path)
+    points, normals = read_points(points_path, scene.unit_scale)
+    try:
+        doc = json.loads(Path(reference_file).read_text())
+        reference = np.asarray(doc["illuminance"], float)
+    except (OSError, ValueError, KeyError) as exc:
+        raise ValueError(f"{Path(reference_file).name}: unreadable reference ({exc})") from exc
+    if reference.shape != (len(points),) or not np.all(np.isfinite(reference)) or np.any(reference <= 0):
+        raise ValueError(f"{Path(reference_file).name}: {reference.size} reference values for {len(points)} points "
+                         "(or not all positive)")
+    rse = doc.get("relative_standard_error") or {}
+    if "standard_error" in doc and not rse:
+        se = np.asarray(doc["standard_error"], float) / reference
+        rse = {"mean": float(se.mean()), "max": float(se.max())}
+    est = doc.get("estimator") or {}
+    method = doc.get("method", "reference")
+    if est:
+        method += " (" + ", ".join(f"{k.replace('_', ' ')} {v:,}" if isinstance(v, int) else f"{k} {v}"
+                                   for k, v in est.items()) + ")"
+    if doc.get("seeds"):
+        method += f"; {doc['seeds']} seeds"
+    try:
+        shown = str(Path(reference_file).resolve().relative_to(ROOT))
+    except ValueError:
+        shown = str(reference_file)
+    full = {"method": method, "file": shown, "standard_error_mean": float(rse.get("mean", 0.0)),
+            "standard_error_max": float(rse.get("max", 0.0)), "seeds": doc.get("seeds"), "estimator": est,
+            "seconds": doc.get("seconds"), **(info or {})}
+    return Bench(name, title, CORPUS, Path(scene_path), Path(points_path), points, normals, reference, full,
+                 zone=room_zone(scene.triangles, points))
+
+
+def prepare_corpus(case: str) -> Bench | str:
+    """The corpus case ``NAME-SKY`` as a :class:`Bench`, or why it is skipped (no
+    reference yet, or one that does not match the scene)."""
+    corpus = corpus_module()
+    scene, sky = corpus_case(case)
+    ref = corpus.reference_path(scene, sky)
+    if not ref.is_file():
+        return f"no reference yet ({ref.relative_to(ROOT) if ref.is_relative_to(ROOT) else ref} is missing)"
+    try:
+        files, points = corpus.prepare(scene)
+        info = {"role": scene.role, "source": scene.source, "description": scene.description, "sky": sky,
+                "scene_file": str(files[sky].relative_to(ROOT)) if files[sky].is_relative_to(ROOT)
+                else str(files[sky])}
+        return corpus_bench(case, f"{case}: {scene.description}, {sky} sky", files[sky], points, ref, info)
+    except (ValueError, OSError, subprocess.CalledProcessError) as exc:
+        return f"cannot be prepared: {exc}"
+
+
 def make_furnished_reference(scene, points, normals, folder: Path, minutes: float, programs, say) -> dict:
     """Our pure Monte Carlo (accuracy 0) at ``REFERENCE_BOUNCES`` bounces over
     ``REFERENCE_SEEDS`` seeds: the mean per point, and its standard error (the runs'
@@ -1005,7 +1168,7 @@ class Runner:
         m = run_measured(cmd, cwd=ex.directory, env=self.env, stdin=ex.directory / ex.points, **self.limits)
         row = self._row(s)
         if m.returncode != 0:
-            row.update(failed=True, error=failure(m))
+            row.update(failed=True, error=failure(m), elapsed=m.seconds)
             return row
         from lbl_illum.radiance import illuminance_from_rtrace
 
@@ -1019,6 +1182,12 @@ class Runner:
             records = None
         amb.unlink(missing_ok=True)
         row.update(seconds=m.seconds, process_seconds=m.seconds, maxrss_kib=m.maxrss_kib, records=records, rays=None)
+        if self.bench.kind == CORPUS:
+            # a user with a new scene runs oconv, then rtrace: both count
+            oconv = self.radiance["oconv_seconds"]
+            row.update(rtrace_seconds=m.seconds, oconv_seconds=oconv, seconds=oconv + m.seconds,
+                       process_seconds=oconv + m.seconds,
+                       maxrss_kib=max(m.maxrss_kib, self.radiance.get("oconv_maxrss_kib", 0)))
         return self._score(row, values)
 
     # -- lbl_illum -----------------------------------------------------------------------
@@ -1043,12 +1212,48 @@ class Runner:
                    load_seconds=doc.get("load_seconds"), warmup_seconds=doc.get("warmup_seconds"))
         return self._score(row, values)
 
+    def run_command(self, s: Setting) -> dict:
+        """One whole ``lbl-illum illuminance`` command (:func:`engine_command`) with the
+        quality flags ``s.args``, in a child process: seconds = its wall time from start
+        to exit; the illuminance from its CSV, records and rays from its ``--stats``."""
+        work = self.folder / "lbl_illum"
+        work.mkdir(parents=True, exist_ok=True)
+        out, stats = work / "out.csv", work / "stats.json"
+        for path in (out, stats, work / "out.summary.json"):
+            path.unlink(missing_ok=True)
+        cmd = engine_command(self.bench.scene_path, self.bench.points_path, out, stats, s.args)
+        env = dict(os.environ)
+        env["LBL_ILLUM_THREADS"] = str(self.processes)
+        env["NUMBA_NUM_THREADS"] = str(self.processes)
+        m = run_measured(cmd, cwd=ROOT, env=env, **self.limits)
+        row = self._row(s)
+        row["command"] = " ".join(["lbl-illum", "illuminance", self.bench.scene_path.name, "--points",
+                                   self.bench.points_path.name, "-o", "out.csv", *s.args, "--stats", "stats.json",
+                                   "-q"])
+        if m.returncode != 0:
+            row.update(failed=True, error=failure(m), elapsed=m.seconds)
+            return row
+        try:
+            values = read_illuminance_csv(out)
+            doc = json.loads(stats.read_text())
+        except (OSError, ValueError) as exc:
+            row.update(failed=True, error=f"unreadable output: {exc}", elapsed=m.seconds)
+            return row
+        row.update(seconds=m.seconds, process_seconds=m.seconds, maxrss_kib=m.maxrss_kib,
+                   compute_seconds=doc.get("compute_seconds"), stats_seconds=doc.get("seconds"),
+                   records=int(sum(doc["records"])), records_per_level=doc["records"], rays=int(doc["rays"]),
+                   primary_evaluations=doc.get("primary_evaluations"), settings=doc.get("settings"))
+        return self._score(row, values)
+
     # -- shared ------------------------------------------------------------------------------
     @staticmethod
     def _row(s: Setting) -> dict:
         row = {"program": s.program, "family": s.family, "label": s.label}
         if s.program == "lbl_illum":
-            row["options"] = s.options
+            if s.options:
+                row["options"] = s.options
+            if s.args:
+                row["flags"] = s.args
         else:
             row["args"] = s.args
         return row
@@ -1061,6 +1266,8 @@ class Runner:
         err = values / ref - 1.0
         row.update(mean_error=float(np.mean(np.abs(err))), max_error=float(np.max(np.abs(err))),
                    bias=float(np.mean(err)), rms_error=float(np.sqrt(np.mean(err * err))))
+        if self.bench.kind == CORPUS:
+            row["illuminance"] = [round(float(v), 4) for v in values]
         return row
 
 
@@ -1126,7 +1333,8 @@ def scene_section(report, bench: Bench, res: dict) -> None:
                              "ours / Radiance's (whole process: our process wall time instead of compute time).")
 
 
-def front_figure(bench: Bench, res: dict):
+def front_figure(bench: Bench, res: dict, levels: Sequence[float] = ERROR_LEVELS,
+                 ylabel: str = "seconds (2 processes / threads)"):
     from lbl_illum_studies.report import new_figure
 
     fig, ax = new_figure(6.4, 4.4)
@@ -1146,10 +1354,10 @@ def front_figure(bench: Bench, res: dict):
                 ax.annotate(short.replace("rad QUALITY=", "rad ").replace(", INDIRECT=", "/"),
                             (100 * r["mean_error"], r["seconds"]), fontsize=6, color=color,
                             xytext=(3, 3), textcoords="offset points")
-    for level in ERROR_LEVELS:
+    for level in levels:
         ax.axvline(100 * level, color="0.6", linestyle=":", linewidth=1)
     se = bench.reference_info.get("standard_error_mean")
-    errors = [100 * r["mean_error"] for r in res["runs"] if not r.get("failed")] + [100 * x for x in ERROR_LEVELS]
+    errors = [100 * r["mean_error"] for r in res["runs"] if not r.get("failed")] + [100 * x for x in levels]
     lo, hi = min(errors + ([100 * se] if se else [])) / 1.5, max(errors) * 1.5
     if se:
         ax.axvspan(lo, 100 * se, color="0.9", zorder=0, label="below the reference's standard error")
@@ -1157,28 +1365,146 @@ def front_figure(bench: Bench, res: dict):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("mean relative error [%]")
-    ax.set_ylabel("seconds (2 processes / threads)")
+    ax.set_ylabel(ylabel)
     ax.set_title(bench.name)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     return fig
 
 
-def write_report(out: Path, benches: list, results: dict, args, programs, seconds: float) -> Path:
+def case_verdict(comparisons: Sequence[dict]) -> str:
+    """Whether a case meets the target over its levels (:func:`compare_at` results):
+    "met" when every level Radiance reaches is met, "missed" when one is missed,
+    "undetermined" when the bounds leave one open, "n/a" when Radiance reaches none."""
+    verdicts = [c["verdict"] for c in comparisons if c["verdict"] != "n/a"]
+    if not verdicts:
+        return "n/a"
+    if "missed" in verdicts:
+        return "missed"
+    if "undetermined" in verdicts:
+        return "undetermined"
+    return "met"
+
+
+def corpus_run_table(runs: Sequence[dict]) -> tuple[list[str], list[list]]:
+    """Header and rows of a corpus case's table of runs: seconds are each program's whole
+    time (ours: the command from start to exit; Radiance: oconv + rtrace), with the parts
+    beside them (ours: the compute time our ``--stats`` reports)."""
+    header = ["program", "family", "setting", "seconds", "of which", "peak MiB", "mean error", "max error", "bias",
+              "records", "rays", "front"]
+    rows = []
+    for r in runs:
+        if r.get("failed"):
+            why = "stopped (time)" if "time limit" in r.get("error", "") else (
+                "stopped (memory)" if "memory limit" in r.get("error", "") else "failed")
+            after = f"after {r['elapsed']:.3g} s" if r.get("elapsed") is not None else "—"
+            rows.append([r["program"], r["family"], r["label"], why, after, "—", "—", "—", "—", "—", "—", ""])
+            continue
+        if r["program"] == "radiance":
+            parts = f"oconv {r['oconv_seconds']:.3g} + rtrace {r['rtrace_seconds']:.3g}"
+        else:
+            parts = "—" if r.get("compute_seconds") is None else f"compute {r['compute_seconds']:.3g}"
+        rows.append([r["program"], r["family"], r["label"], f"{r['seconds']:.3g}", parts,
+                     f"{r['maxrss_kib'] / 1024:.0f}", pct(r["mean_error"]), pct(r["max_error"]), pct(r["bias"]),
+                     "—" if r.get("records") is None else f"{r['records']:,}",
+                     "—" if r.get("rays") is None else f"{r['rays']:,}", "★" if r.get("front") else ""])
+    return header, rows
+
+
+def corpus_section(report, bench: Bench, res: dict, processes: int) -> None:
+    """Heading, reference, table of runs, plot and equal-error ratios of one corpus case."""
+    info = bench.reference_info
+    report.heading(bench.title)
+    text = (f"Scene `{info.get('scene_file', bench.scene_path.name)}` ({info.get('source', '')}; role "
+            f"{info.get('role', '?')}).  Reference: {info['method']} (`{info['file']}`); its standard error is "
+            f"{pct(info['standard_error_mean'])} mean and {pct(info['standard_error_max'])} max over the "
+            f"{len(bench.reference)} points, so a mean error much below about "
+            f"{pct(0.8 * info['standard_error_mean'])} cannot be told from the reference's own noise.")
+    report.text(text)
+    rad = res.get("radiance_setup")
+    if rad:
+        report.text(f"Radiance ({rad['version']}): export {rad['export_seconds']:.2f} s (not counted)"
+                    + (" (triangles compiled by obj2mesh)" if rad["mesh"] else "")
+                    + f"; `oconv` {rad['oconv_seconds']:.3g} s, counted in every Radiance run; octree cube "
+                      f"{rad['cube']:.4g} m; zone {' '.join(f'{v:.3g}' for v in bench.zone)} m; `-ar` "
+                      f"{rad.get('ar', '?')}.")
+    elif res.get("radiance_error"):
+        report.text(f"**Radiance did not run on this case**: {res['radiance_error']}")
+    header, rows = corpus_run_table(res["runs"])
+    report.table(header, rows, caption=(f"{bench.name}: every run.  seconds = lbl_illum: the whole command "
+                                        "`lbl-illum illuminance …` from start to exit; Radiance: oconv + "
+                                        f"`rtrace -I -h -n {processes}`; ★ = on its program's Pareto front."))
+    report.figure(f"{bench.name}-front", front_figure(bench, res, CORPUS_ERROR_LEVELS,
+                                                      "seconds (whole command; Radiance oconv + rtrace)"),
+                  f"{bench.name}: seconds against mean relative error, all runs (faint) and each program's Pareto "
+                  "front (lines); dotted: the error levels compared; grey: below the reference's standard error.")
+    comp = res.get("comparison")
+    if comp:
+        rows = [[pct(c["level"], 1), seconds_text(c["ours_seconds"], c["ours_kind"]),
+                 seconds_text(c["radiance_seconds"], c["radiance_kind"]), ratio_text(c), c["verdict"]]
+                for c in comp["command"]]
+        report.table(["mean error", "lbl_illum s", "Radiance s", "ratio", f"target ≤ {TARGET_RATIO:g}"], rows,
+                     caption=f"{bench.name}: time at equal mean error, interpolated on each Pareto front; ratio = "
+                             f"ours / Radiance's.  Over the levels Radiance reaches: **{res['verdict']}**.")
+
+
+def corpus_summary(report, benches: Sequence[Bench], results: dict, skipped: dict, radiance: bool) -> None:
+    """The corpus summary: case × error level → ratio, and whether the target is met."""
+    rows = []
+    for b in benches:
+        res = results[b.name]
+        comp = res.get("comparison")
+        se = pct(b.reference_info["standard_error_mean"])
+        if comp:
+            cells = [ratio_text(c) + ("" if c["verdict"] in ("met", "n/a") else f" ({c['verdict']})")
+                     for c in comp["command"]]
+            rows.append([b.name, b.reference_info.get("role", ""), se] + cells + [res["verdict"]])
+        else:
+            why = "Radiance did not run" if not radiance else (res.get("radiance_error") or "no comparison")
+            rows.append([b.name, b.reference_info.get("role", ""), se] + ["—"] * len(CORPUS_ERROR_LEVELS)
+                        + [why[:60]])
+    for case, why in skipped.items():
+        rows.append([case, "", "—"] + ["—"] * len(CORPUS_ERROR_LEVELS) + [f"skipped: {why}"])
+    if rows:
+        report.table(["case", "role", "ref. SE"] + [f"ratio at {pct(level, 1)}" for level in CORPUS_ERROR_LEVELS]
+                     + ["target"], rows,
+                     caption=f"Corpus: our time / Radiance's at equal mean relative error, each the whole time a "
+                             f"user waits (our command; oconv + rtrace).  Target: ≤ {TARGET_RATIO:g} at every level "
+                             "Radiance reaches; “Radiance not reached”: none of its runs gets there (the level does "
+                             "not count), “lbl_illum not reached”: ours does not (a miss).  ref. SE: the "
+                             "reference's mean relative standard error.")
+    verdicts = [results[b.name].get("verdict") for b in benches if results[b.name].get("comparison")]
+    if verdicts:
+        counts = {v: verdicts.count(v) for v in ("met", "missed", "undetermined", "n/a") if verdicts.count(v)}
+        report.text(f"Corpus target over {len(verdicts)} compared case(s): "
+                    + ", ".join(f"{n} {v}" for v, n in counts.items()) + "."
+                    + (f"  Skipped: {', '.join(skipped)} (see the table)." if skipped else ""))
+    elif skipped:
+        report.text(f"Skipped corpus cases: {'; '.join(f'{c}: {w}' for c, w in skipped.items())}.")
+
+
+def write_report(out: Path, benches: list, results: dict, args, programs, seconds: float,
+                 skipped: dict | None = None) -> Path:
     from lbl_illum_studies.report import Report, environment
 
+    skipped = skipped or {}
+    classic = [b for b in benches if b.kind != CORPUS]
+    corpus = [b for b in benches if b.kind == CORPUS]
+    name = CORPUS_NAME if (corpus or skipped) and not classic else NAME
     command = "python validation/bench/compare_radiance.py --out " + str(args.out_display)
     if args.scenes_given:
-        command += " --scenes " + ",".join(b.name for b in benches)
+        command += " --scenes " + (args.scenes if corpus or skipped else ",".join(b.name for b in benches))
     if args.quick:
         command += " --quick"
-    report = Report(NAME, TITLE, command)
+    if getattr(args, "run_timeout", RUN_TIMEOUT) != RUN_TIMEOUT:
+        command += f" --run-timeout {args.run_timeout:g}"
+    report = Report(name, TITLE, command)
     report.heading("Summary")
     if programs is None:
         report.text("**Radiance did not run** (`--no-radiance`, or no `pyradiance` and no `oconv`/`rtrace` on the "
                     "PATH): only lbl_illum ran, so there are no ratios.  Install the `radiance` extra to compare.")
     rows = []
-    for b in benches:
+    for b in classic:
         comp = results[b.name].get("comparison")
         if comp:
             rows.append([b.name] + [ratio_text(c) + f" ({c['verdict']})" for c in comp["compute"]])
@@ -1186,30 +1512,62 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
         report.table(["scene"] + [f"ratio at {pct(level, 0)}" for level in ERROR_LEVELS], rows,
                      caption=f"Our time / Radiance's at equal mean relative error (target ≤ {TARGET_RATIO:g} at every "
                              "level Radiance reaches).")
-    report.text(
-        f"Target: at every mean error level Radiance reaches among {', '.join(pct(x, 0) for x in ERROR_LEVELS)}, "
-        f"lbl_illum needs at most {TARGET_RATIO:g} × Radiance's time (a ratio ≤ {TARGET_RATIO:g}).  Both run on "
-        f"{args.processes} processes or threads; " + ("this is the quick version (a few settings, office only)."
-                                                      if args.quick else "the full ladders."))
+    if classic:
+        report.text(
+            f"Target: at every mean error level Radiance reaches among {', '.join(pct(x, 0) for x in ERROR_LEVELS)}, "
+            f"lbl_illum needs at most {TARGET_RATIO:g} × Radiance's time (a ratio ≤ {TARGET_RATIO:g}).  Both run on "
+            f"{args.processes} processes or threads; " + ("this is the quick version (a few settings, office only)."
+                                                          if args.quick else "the full ladders."))
+    if corpus or skipped:
+        corpus_summary(report, corpus, results, skipped, programs is not None)
+        report.text(
+            f"Corpus target: at every mean error level Radiance reaches among "
+            f"{', '.join(pct(x, 1) for x in CORPUS_ERROR_LEVELS)}, the whole `lbl-illum illuminance` command takes "
+            f"at most {TARGET_RATIO:g} × Radiance's oconv + rtrace.  Both run on {args.processes} processes or "
+            "threads; " + ("this is the quick version (two settings per program)." if args.quick
+                           else "the full corpus ladders."))
     report.heading("How it is measured")
-    report.bullets([
-        "lbl_illum: a child process per run loads the scene, warms up on 4 points at cheap settings (after one "
-        "untimed run per scene that fills numba's compilation cache), then times "
-        "`Integrator(scene, options).compute(points, normals)` (the **seconds** column); **process s** is the "
-        "child's whole wall time (Python start-up, imports, scene loading, warm-up).",
-        f"Radiance: `rtrace -I -h -n {args.processes}` reading the points on standard input; seconds = its wall time. "
-        "The scene is exported by `lbl_illum.radiance.export_radiance` with glass as a BRTDfunc of constant "
-        "coefficients (our glass exactly); `oconv` is timed once per scene.  Ladder runs use "
-        f"`-lw {LIMIT_WEIGHT}`; rtrace's defaults otherwise.",
-        "Radiance's `-ab` counts the sky (a glow found by the indirect calculation) as a bounce: `-ab n` ≈ our "
-        "`bounces = n − 1`.  The interior ladders use `-ab 8`, ours `bounces = 8`; the references follow 12.",
+    bullets = []
+    if classic:
+        bullets += [
+            "lbl_illum (office, sphere-plane, furnished): a child process per run loads the scene, warms up on 4 "
+            "points at cheap settings (after one untimed run per scene that fills numba's compilation cache), then "
+            "times `Integrator(scene, options).compute(points, normals)` (the **seconds** column); **process s** is "
+            "the child's whole wall time (Python start-up, imports, scene loading, warm-up).",
+            f"Radiance (office, sphere-plane, furnished): `rtrace -I -h -n {args.processes}` reading the points on "
+            "standard input; seconds = its wall time; `oconv` is timed once per scene and not counted.  Ladder "
+            f"runs use `-lw {LIMIT_WEIGHT}`; rtrace's defaults otherwise.",
+            "Radiance's `-ab` counts the sky (a glow found by the indirect calculation) as a bounce: `-ab n` ≈ our "
+            "`bounces = n − 1`.  The interior ladders use `-ab 8`, ours `bounces = 8`; the references follow 12.",
+            "rad presets: the `rpict` options `rad -n -e` prints for a .rif with the room as an interior ZONE, "
+            "DETAIL=medium, VARIABILITY=high and INDIRECT 2 or 5 (the diffuse reflections that matter, counting "
+            "the sky's light as the first), minus the view and picture "
+            "options; they include rad's own `-av` (a constant ambient at the bounce limit) and `-lr`/`-lw`.  "
+            "QUALITY=LOW sets no `-ab` (0: the ambient is `-av` alone).",
+        ]
+    if corpus or skipped:
+        ladder = corpus_engine_ladder(args.quick)
+        bullets += [
+            "lbl_illum on corpus cases: every run is the whole command a user types, `python -m lbl_illum "
+            "illuminance SCENE --points PTS -o OUT.csv FLAGS --stats STATS.json -q`, timed from start to exit "
+            "(Python start-up, imports, loading the scene, compiled kernels from numba's disk cache, the "
+            "calculation, writing); one untimed run of the first setting per case (and cheap ones of the other "
+            "kinds before the first case) fills the kernel cache.  Illuminance: column `illuminance` of the CSV; "
+            "records: the sum over levels of `records` in the stats, rays: `rays`; “compute” is the stats' "
+            f"`compute_seconds`.  FLAGS: {'; '.join(f'`{s.label}`' for s in ladder)} (the presets are "
+            "`lbl_illum.options.PRESETS`; explicit flags leave the rest at the command's defaults).",
+            f"Radiance on corpus cases: the scene exported once by `lbl_illum.radiance.export_radiance` (glass as a "
+            f"constant-coefficient BRTDfunc; export time not counted), then `oconv` (timed once per case) and "
+            f"`rtrace -I -h -n {args.processes}` with `-ab 9` (= our 8 bounces: Radiance counts the sky as one), "
+            f"`-lw {LIMIT_WEIGHT}`, (-aa, -ad) pairs with `-as` = -ad/2 and pure Monte Carlo `-aa 0` at rising "
+            "-ad; a run's seconds are oconv's plus rtrace's (a user with a new scene runs both).",
+            f"Every run is stopped after `--run-timeout` ({args.run_timeout:g} s) or past `--memory-limit` "
+            f"({args.memory_limit:g} GiB) and shown as stopped; failed runs are shown as failed.  Cases whose "
+            "reference (`validation/data/corpus/NAME-SKY.json`) is missing are skipped and listed.",
+        ]
+    bullets += [
         "`-ar` relative to the room, as `rad` sets it: ar = f · cube / zone (f = 8 unless stated), smallest record "
         "radius aa · zone / f.",
-        "rad presets: the `rpict` options `rad -n -e` prints for a .rif with the room as an interior ZONE, "
-        "DETAIL=medium, VARIABILITY=high and INDIRECT 2 or 5 (the diffuse reflections that matter, counting the "
-        "sky's light as the first), minus the view and picture "
-        "options; they include rad's own `-av` (a constant ambient at the bounce limit) and `-lr`/`-lw`.  "
-        "QUALITY=LOW sets no `-ab` (0: the ambient is `-av` alone).",
         "Peak memory: the larger of `ru_maxrss` of the child from `os.wait4` and the resident memory of the child "
         "and its own children sampled every 0.05 s (for `rtrace -n 2`, the sum over its processes, whose "
         "`ru_maxrss` the parent does not always include); children start from a small launcher process "
@@ -1219,15 +1577,26 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
         "“≤” where the program's fastest run is already within the level (its time is an upper bound), "
         "“not reached” where no run gets there.",
         "Seconds on a shared machine drift by tens of percent between runs; ratios from one run are what compare.",
-    ])
-    for b in benches:
+    ]
+    report.bullets(bullets)
+    for b in classic:
         scene_section(report, b, results[b.name])
+    for b in corpus:
+        corpus_section(report, b, results[b.name], args.processes)
     report.results = {"scenes": {b.name: {"title": b.title, "reference": b.reference_info, "zone": b.zone,
-                                          **results[b.name]} for b in benches},
+                                          **results[b.name]} for b in classic},
                       "error_levels": list(ERROR_LEVELS), "target_ratio": TARGET_RATIO,
                       "processes": args.processes, "radiance": programs is not None}
+    if corpus or skipped:
+        report.results.update(
+            corpus={b.name: {"title": b.title, "reference": b.reference_info, "zone": b.zone,
+                             "scene_file": str(b.scene_path), "points_file": str(b.points_path),
+                             "reference_illuminance": b.reference.tolist(), **results[b.name]} for b in corpus},
+            corpus_skipped=dict(skipped), corpus_error_levels=list(CORPUS_ERROR_LEVELS),
+            corpus_verdicts={b.name: results[b.name].get("verdict") for b in corpus},
+            run_timeout=args.run_timeout, memory_limit_gib=args.memory_limit)
     meta = {"quick": args.quick, "seconds": seconds, "environment": environment()}
-    return report.write(out / NAME, meta)
+    return report.write(out / name, meta)
 
 
 # ---------------------------------------------------------------------------
@@ -1235,28 +1604,56 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
 # ---------------------------------------------------------------------------
 
 def parse_scenes(text: str) -> list[str]:
-    """Scene names from a comma-separated list; ValueError naming an unknown one."""
-    names = [s.strip() for s in text.split(",") if s.strip()]
-    for n in names:
-        if n not in SCENES:
-            raise ValueError(f"--scenes: unknown scene {n!r} (choose from {', '.join(SCENES)})")
+    """Scene names from a comma-separated list; ValueError naming an unknown one.
+
+    Besides :data:`SCENES`: ``corpus`` (every corpus case), ``corpus:NAME`` (both skies
+    of corpus scene NAME) and ``corpus:NAME-SKY`` (one case), each returned as
+    ``corpus:NAME-SKY`` in the corpus's order within the item."""
+    names = []
+    for n in (s.strip() for s in text.split(",")):
+        if not n:
+            continue
+        if n == CORPUS:
+            names += [CORPUS_PREFIX + c for c in corpus_case_names()]
+        elif n.startswith(CORPUS_PREFIX):
+            case = n[len(CORPUS_PREFIX):].strip()
+            scenes = {scene.name for scene, _ in corpus_module().cases()}
+            if case in scenes:
+                names += [CORPUS_PREFIX + f"{scene.name}-{sky}" for scene, sky in corpus_module().cases([case])]
+            else:
+                corpus_case(case)                      # ValueError when unknown
+                names.append(CORPUS_PREFIX + case)
+        elif n in SCENES:
+            names.append(n)
+        else:
+            raise ValueError(f"--scenes: unknown scene {n!r} (choose from {', '.join(SCENES)}, {CORPUS}, "
+                             f"{CORPUS_PREFIX}NAME or {CORPUS_PREFIX}NAME-SKY)")
     if not names:
         raise ValueError("--scenes: no scene given")
     return list(dict.fromkeys(names))
 
 
+def is_corpus(name: str) -> bool:
+    """Whether a name of :func:`parse_scenes` is a corpus case."""
+    return name.startswith(CORPUS_PREFIX)
+
+
 def parse_args(argv=None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         description="lbl_illum side by side with Radiance's rtrace: seconds against error on the office, the "
-                    "sphere on a plane and the furnished office; time ratio at equal error.",
+                    "sphere on a plane and the furnished office, and on the accuracy corpus (--scenes corpus); "
+                    "time ratio at equal error.",
         epilog="Writes OUT/radiance-comparison/ (report.md, report.html, plots, results.json).  The full run takes "
                "about two hours on 2 cores; --quick under a minute.")
     parser.add_argument("--out", default="docs/performance", metavar="DIR",
                         help="folder of the report folder radiance-comparison/ (default: docs/performance)")
     parser.add_argument("--scenes", default=None,
-                        help=f"comma-separated scenes of {', '.join(SCENES)} (default: all; office with --quick)")
+                        help=f"comma-separated scenes of {', '.join(SCENES)} (default: all; office with --quick), "
+                             f"or corpus cases: {CORPUS} (all, hours), {CORPUS_PREFIX}NAME (both skies), "
+                             f"{CORPUS_PREFIX}NAME-SKY (e.g. {CORPUS_PREFIX}deep-room-overcast)")
     parser.add_argument("--quick", action="store_true",
-                        help="two or three settings per program, on the office unless --scenes says otherwise")
+                        help="two or three settings per program (two on corpus cases), on the office unless "
+                             "--scenes says otherwise")
     parser.add_argument("--list", action="store_true", help="print the ladders and exit")
     parser.add_argument("--processes", type=int, default=PROCESSES,
                         help=f"Radiance -n and our threads (default {PROCESSES})")
@@ -1289,7 +1686,15 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 
 def list_ladders(args) -> None:
-    for name in args.scene_list:
+    corpus = [n for n in args.scene_list if is_corpus(n)]
+    if corpus:
+        ours = corpus_engine_ladder(args.quick)
+        theirs = radiance_ladder(CORPUS, cube=1.0, zone_size=1.0, quick=args.quick)
+        print(f"corpus ({len(corpus)} case(s): {', '.join(n[len(CORPUS_PREFIX):] for n in corpus)}): lbl_illum "
+              f"{len(ours)} runs, Radiance {len(theirs)} runs each (-ar shown for cube = zone)")
+        for s in ours + theirs:
+            print(f"  {s.program:9s} {s.family:20s} {s.label}")
+    for name in (n for n in args.scene_list if not is_corpus(n)):
         ours = engine_ladder(name, args.quick)
         theirs = radiance_ladder(name, cube=1.0, zone_size=1.0, quick=args.quick)
         rad = QUICK_RAD_PRESETS if args.quick and RAD_PRESETS[name] else RAD_PRESETS[name]
@@ -1349,70 +1754,131 @@ def compare(args) -> int:
     if not OFFICE_REFERENCE.is_file() and "office" in args.scene_list:
         print(f"compare_radiance: {OFFICE_REFERENCE.name}: no such file", file=sys.stderr)
         return 2
-    benches, results, failures = [], {}, 0
+    benches, results, failures, skipped = [], {}, 0, {}
+    primed = False
     for name in args.scene_list:
-        say(f"{name}: preparing")
-        if name == "office":
-            bench = prepare_office()
-        elif name == "sphere-plane":
-            bench = prepare_sphere_plane(build)
+        if is_corpus(name):
+            case = name[len(CORPUS_PREFIX):]
+            say(f"{case}: preparing")
+            bench = prepare_corpus(case)
+            if isinstance(bench, str):
+                skipped[case] = bench
+                tqdm.write(f"compare_radiance: {case}: skipped: {bench}", file=sys.stderr)
+                continue
+            runner, settings, res = corpus_setup(bench, build / CORPUS, programs, args, say, tqdm.write)
+            bar.total += len(settings)
+            bar.refresh()
+            say(f"{case}: priming")
+            if not primed:                         # cheap runs of the other kinds: every kernel in the cache
+                for flags in CORPUS_PRIMERS:
+                    runner.run_command(Setting("lbl_illum", "primer", " ".join(flags), args=list(flags)))
+                primed = True
+            first = runner.run_command(settings[0])     # untimed: caches warm, kernels compiled
+            res["priming"] = {"label": settings[0].label, "seconds": first.get("seconds", first.get("elapsed")),
+                              "failed": bool(first.get("failed"))}
         else:
-            bench = prepare_furnished(build, args.triangles, args.remake_reference, args.reference_minutes,
-                                      programs, say)
-        kind = bench.kind
-        runner = Runner(bench, build, programs, args.processes, args.run_timeout, args.memory_limit)
-        settings = engine_ladder(kind, args.quick)
-        res: dict = {"runs": []}
-        if programs is not None:
-            setup = runner.prepare_radiance()
-            res["radiance_setup"] = setup
-            z = bench.zone
-            zone_size = ((z[1] - z[0]) + (z[3] - z[2]) + (z[5] - z[4])) / 3.0
-            settings += radiance_ladder(kind, setup["cube"], zone_size, args.quick)
-            presets = QUICK_RAD_PRESETS if args.quick and RAD_PRESETS[kind] else RAD_PRESETS[kind]
-            settings += rad_settings(programs, runner.export, bench.zone, presets)
-        bar.total += len(settings)
-        bar.refresh()
-        engine_settings = [s for s in settings if s.program == "lbl_illum"]
-        if engine_settings:
-            say(f"{name}: priming")
-            runner.run_engine(engine_settings[0])      # untimed: numba compiles into its cache here
+            say(f"{name}: preparing")
+            if name == "office":
+                bench = prepare_office()
+            elif name == "sphere-plane":
+                bench = prepare_sphere_plane(build)
+            else:
+                bench = prepare_furnished(build, args.triangles, args.remake_reference, args.reference_minutes,
+                                          programs, say)
+            kind = bench.kind
+            runner = Runner(bench, build, programs, args.processes, args.run_timeout, args.memory_limit)
+            settings = engine_ladder(kind, args.quick)
+            res = {"runs": []}
+            if programs is not None:
+                setup = runner.prepare_radiance()
+                res["radiance_setup"] = setup
+                settings += radiance_ladder(kind, setup["cube"], zone_mean_side(bench.zone), args.quick)
+                presets = QUICK_RAD_PRESETS if args.quick and RAD_PRESETS[kind] else RAD_PRESETS[kind]
+                settings += rad_settings(programs, runner.export, bench.zone, presets)
+            bar.total += len(settings)
+            bar.refresh()
+            engine_settings = [s for s in settings if s.program == "lbl_illum"]
+            if engine_settings:
+                say(f"{name}: priming")
+                runner.run_engine(engine_settings[0])      # untimed: numba compiles into its cache here
         rows: dict = {}
         for k in run_order(settings):
             s = settings[k]
-            say(f"{name}: {s.program} {s.label}")
-            row = runner.run_engine(s) if s.program == "lbl_illum" else runner.run_radiance(s)
+            say(f"{bench.name}: {s.program} {s.label}")
+            if s.program != "lbl_illum":
+                row = runner.run_radiance(s)
+            else:
+                row = runner.run_command(s) if bench.kind == CORPUS else runner.run_engine(s)
             if row.get("failed"):
                 failures += 1
-                tqdm.write(f"compare_radiance: {name}: {s.program} {s.label}: failed: {row.get('error', '')}",
+                tqdm.write(f"compare_radiance: {bench.name}: {s.program} {s.label}: failed: {row.get('error', '')}",
                            file=sys.stderr)
             rows[k] = row
             bar.update(1)
         res["runs"] = [rows[k] for k in range(len(settings))]
         ours = front_pairs(res["runs"], "lbl_illum")
         theirs = front_pairs(res["runs"], "radiance")
-        if programs is not None:
+        if bench.kind == CORPUS:
+            if "radiance_setup" in res:
+                res["comparison"] = {"command": [compare_at(ours, theirs, e) for e in CORPUS_ERROR_LEVELS]}
+                res["verdict"] = case_verdict(res["comparison"]["command"])
+        elif programs is not None:
             ours_process = front_pairs(res["runs"], "lbl_illum", key="process_seconds")
             res["comparison"] = {"compute": [compare_at(ours, theirs, e) for e in ERROR_LEVELS],
                                  "process": [compare_at(ours_process, theirs, e) for e in ERROR_LEVELS]}
         res["fronts"] = {"lbl_illum": ours, "radiance": theirs}
         benches.append(bench)
-        results[name] = res
+        results[bench.name] = res
     bar.close()
     out = Path(args.out)
-    folder = write_report(out, benches, results, args, programs, time.perf_counter() - t_start)
+    folder = write_report(out, benches, results, args, programs, time.perf_counter() - t_start, skipped)
     parts = []
     for b in benches:
         comp = results[b.name].get("comparison")
-        if comp:
+        if comp and b.kind == CORPUS:
+            parts.append(f"{b.name} " + " / ".join(short_ratio(c) for c in comp["command"])
+                         + f" ({results[b.name]['verdict']})")
+        elif comp:
             parts.append(f"{b.name} " + " / ".join(short_ratio(c) for c in comp["compute"]))
         else:
             parts.append(f"{b.name} (ours only)")
+    parts += [f"{case} skipped" for case in skipped]
     runs = sum(len(r["runs"]) for r in results.values())
+    levels = "/".join(pct(e, 0).replace(' ', '') for e in ERROR_LEVELS)
+    if any(b.kind == CORPUS for b in benches):
+        levels += " (corpus " + "/".join(pct(e, 1).replace(' ', '') for e in CORPUS_ERROR_LEVELS) + ")"
     print(f"radiance-comparison: {len(benches)} scene(s), {runs} runs ({failures} failed or stopped); ratio "
-          f"ours/Radiance at {'/'.join(pct(e, 0).replace(' ', '') for e in ERROR_LEVELS)}: {'; '.join(parts)}; "
-          f"{time.perf_counter() - t_start:.0f} s -> {folder}")
+          f"ours/Radiance at {levels}: {'; '.join(parts)}; {time.perf_counter() - t_start:.0f} s -> {folder}")
     return 0
+
+
+def zone_mean_side(zone: Sequence[float]) -> float:
+    """Mean side [m] of a zone (x0, x1, y0, y1, z0, z1): ``rad``'s zone size for ``-ar``."""
+    z = zone
+    return ((z[1] - z[0]) + (z[3] - z[2]) + (z[5] - z[4])) / 3.0
+
+
+def corpus_setup(bench: Bench, build: Path, programs, args, say, warn) -> tuple:
+    """The runner, the settings (ours, then Radiance's when it runs) and the result dict
+    of one corpus case.  Radiance's export and ``oconv`` are done here; when they fail
+    the case runs on our side only and ``res["radiance_error"]`` says why."""
+    runner = Runner(bench, build, programs, args.processes, args.run_timeout, args.memory_limit)
+    settings = corpus_engine_ladder(args.quick)
+    res: dict = {"runs": []}
+    if programs is not None:
+        say(f"{bench.name}: Radiance export and oconv")
+        try:
+            setup = runner.prepare_radiance()
+        except Exception as exc:        # noqa: BLE001 - one case's export must not stop the corpus
+            res["radiance_error"] = f"{type(exc).__name__}: {str(exc)[-300:]}"
+            warn(f"compare_radiance: {bench.name}: Radiance not run: {res['radiance_error']}", file=sys.stderr)
+        else:
+            zone_size = zone_mean_side(bench.zone)
+            setup["ar"] = ambient_resolution(AR_FACTOR, setup["cube"], zone_size)
+            setup["zone_size"] = zone_size
+            res["radiance_setup"] = setup
+            settings += radiance_ladder(CORPUS, setup["cube"], zone_size, args.quick)
+    return runner, settings, res
 
 
 if __name__ == "__main__":
