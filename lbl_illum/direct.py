@@ -11,13 +11,17 @@
   straddles the surface's horizon (|N·s| < sin δ, δ = 0.27° the disk's radius) each ray
   carries its own max(0, N·d): E = E_dn · mean(max(0, N·d) T(d)), the part below the
   horizon adding nothing.
+* The sun's images in flat mirrors and panes of glass (virtual suns,
+  :mod:`lbl_illum.sunmirrors`): one direction over the disk per light sample, at most
+  :data:`MAX_MIRROR_SAMPLES`.
 * Light surfaces (Lambertian emitters, two-sided): area sampling,
   E = (1/n) Σ L cos θ_r cos θ_l / d² / p_A, with triangles chosen in proportion to
   area × luminance and points uniform on them (Pharr, Jakob & Humphreys,
   *Physically Based Rendering*, 4th ed., §12.2 and §6.5).
 
 The indirect calculation never counts these sources again: a hemisphere ray that
-reaches a light surface or the sun directly contributes nothing (paper §5).
+reaches a light surface or the sun directly contributes nothing (paper §5), nor one that
+reaches the sun after a specular reflection.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from .geometry import TriangleSampler
 from .materials import GLASS, LIGHT, MaterialTable
 from .raycast import MAX_GLASS_LAYERS, SELF_HIT_EPSILON, Tracer
 from .sun import SUN_COS_HALF_ANGLE, Sun
+from .sunmirrors import SunMirrors
 
 #: Shadow rays over the sun's disk, stratified (32 × 32), at sensor points the first rays
 #: found partly shaded: a penumbra, where a few random rays are off by tens of percent.
@@ -38,6 +43,8 @@ SUN_SIN_HALF_ANGLE = float(np.sqrt(1.0 - SUN_COS_HALF_ANGLE ** 2))
 
 #: Rays along the rim of the sun's disk in the partial-shade test at sensor points.
 RIM_RAYS = 16
+#: Most sun directions per point for the sun reflected by mirrors and panes.
+MAX_MIRROR_SAMPLES = 16
 #: Most shadow rays traced in one call.
 MAX_SHADOW_BATCH = 1 << 20
 
@@ -76,6 +83,17 @@ class DirectLight:
             self.light_luminance = materials.luminance[tri.material[light_ids]]
             power = tri.areas[light_ids] * np.maximum(self.light_luminance.mean(axis=1), 0.0)
             self.lights = TriangleSampler(tri, light_ids, power)
+        #: the sun's images in flat mirrors and panes (:mod:`lbl_illum.sunmirrors`)
+        self.mirrors = SunMirrors(tracer, materials) if self.sun is not None else None
+        if self.mirrors is not None and len(self.mirrors) == 0:
+            self.mirrors = None
+
+    def notes(self) -> list[str]:
+        """What the user should hear of the direct light."""
+        if self.mirrors is not None and self.mirrors.dropped:
+            return [f"the sun's reflection is followed in the {len(self.mirrors)} largest planes of mirrors and "
+                    f"glass; {self.mirrors.dropped} smaller planes reflect no sun"]
+        return []
 
     @property
     def has_lights(self) -> bool:
@@ -120,6 +138,12 @@ class DirectLight:
                     T[part] = self._sun_transmittance(origins[lit][part], shading_normals[lit][part], cut[part],
                                                       max(PENUMBRA_SAMPLES, light_samples), rng, stratified=True)[0]
                 E[lit] += self.sun.direct_normal_illuminance * np.where(cut, 1.0, cos[lit])[:, None] * T
+            if self.mirrors is not None:
+                m = max(1, min(light_samples, MAX_MIRROR_SAMPLES))
+                for _ in range(m):
+                    d = self.sun.sample_directions(rng.random(n), rng.random(n))
+                    E += self.mirrors.illuminance(origins, shading_normals, d, self.sun.direction,
+                                                  self.sun.direct_normal_illuminance, self.transmittance) / m
         if self.has_lights:
             for _ in range(light_samples):
                 E += self._light_sample(points, origins, shading_normals, rng) / light_samples

@@ -321,9 +321,10 @@ class Integrator:
         panes left out because no sky lies behind them (:mod:`lbl_illum.portals`)."""
         ps = self.portal_set
         if ps is None:
-            return []
+            return self.direct.notes()
         notes = [f"unglazed opening found, sampled as a portal: {o.describe(self.scene.unit_scale, self.scene.units)} (find_openings = false to turn "
                  "this off)" for o in ps.openings]
+        notes += self.direct.notes()
         if ps.dropped:
             notes.append(f"{ps.dropped} glass {'triangle is' if ps.dropped == 1 else 'triangles are'} not sampled as "
                          "a portal: no sky behind them (portal = true on the material samples them anyway)")
@@ -435,11 +436,9 @@ class Integrator:
                     mis_weight[ray] = self._hemisphere_weight(mis_normals[ray], d, p_open, S, n_p[ray])
             esc = np.flatnonzero(~hits.hit)
             if len(esc):
-                L = self.sky.luminance(d[esc])
-                if self.sun is not None:
-                    sun_seen = reflected[esc] & self.sun.within_disk(d[esc])
-                    L[sun_seen] += self.sun.luminance
-                radiance[ray[esc]] += through[esc] * L
+                # (the sun seen after a reflection adds nothing here: the direct light
+                # counts it as the sun's image in flat mirrors and panes, lbl_illum.sunmirrors)
+                radiance[ray[esc]] += through[esc] * self.sky.luminance(d[esc])
             hit = np.flatnonzero(hits.hit)
             if len(hit) == 0:
                 break

@@ -51,8 +51,13 @@ from studies.corpus_scenes import SKIES, cases, prepare, reference_path  # noqa:
 POINT_SAMPLES, HIT_SAMPLES, BOUNCES, SEED_BASE = 4096, 4, 12, 5000
 #: Fewest seeds of a reference (its standard error is itself estimated from them).
 MIN_SEEDS = 8
-#: Shadow rays per sensor for the direct light (a 64 × 64 stratified grid over the sun's disk).
+#: Shadow rays per sensor for the direct light (a 64 × 64 stratified grid over the sun's disk;
+#: the sun's images in mirrors and panes, lbl_illum.sunmirrors, with 16 of them).
 DIRECT_SAMPLES = 4096
+#: Sensors per engine call: pure Monte Carlo shares nothing between sensors, and every hit
+#: of every sensor's rays keeps a record until the call ends (the cabin's 40 sensors at
+#: once took more than 13 GB).
+POINTS_PER_CALL = 12
 #: Radiance's pure Monte Carlo for the cross-check (-ab counts the sky as a bounce).
 RADIANCE_ARGS = ["-ab", str(BOUNCES + 1), "-aa", "0", "-ad", "8192", "-as", "0", "-lw", "1e-6"]
 
@@ -89,12 +94,15 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
     path = reference_path(scene, sky)
     doc = json.loads(path.read_text()) if path.is_file() else None
     method = {"point_samples": POINT_SAMPLES, "samples": HIT_SAMPLES, "bounces": BOUNCES,
-              "direct_samples": DIRECT_SAMPLES}
+              "direct_samples": DIRECT_SAMPLES, "sun_images": "virtual suns"}
     lbl = load_scene(files[sky])
     P, N = read_points(points_file, lbl.unit_scale)
-    old = {k: v for k, v in method.items() if k != "direct_samples"}
-    if doc is not None and doc.get("estimator") == old and lbl.sun is None:
-        doc["estimator"] = method          # made before the direct light was split off: no sun, no change
+    if doc is not None and lbl.sun is None and {k: v for k, v in doc.get("estimator", {}).items()
+                                               if k not in ("direct_samples", "sun_images")} == \
+            {k: v for k, v in method.items() if k not in ("direct_samples", "sun_images")}:
+        # made before the direct light was split off or the sun's images were direct light:
+        # without a sun neither changes anything
+        doc["estimator"] = method
     if doc is None or doc.get("estimator") != method:
         doc = {"scene": str(files[sky].relative_to(ROOT)), "points": str(points_file.relative_to(ROOT)),
                "method": "pure Monte Carlo (accuracy 0): own evaluation of every sensor and of every hit of its "
@@ -109,14 +117,18 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
             if rse < target or time.perf_counter() - t0 > 60 * minutes:
                 break
         seed = SEED_BASE + len(doc["runs"])
-        r = compute_illuminance(lbl, P, N, options(seed))
-        doc["runs"].append(luminance(r.indirect).round(5).tolist())
-        doc["rays"] += int(r.stats.rays)
-        doc["seconds"] += r.stats.seconds
+        indirect = []
+        for start in range(0, len(P), POINTS_PER_CALL):
+            part = slice(start, start + POINTS_PER_CALL)
+            r = compute_illuminance(lbl, P[part], N[part], options(seed * 1000 + start))
+            indirect.append(luminance(r.indirect))
+            doc["rays"] += int(r.stats.rays)
+            doc["seconds"] += r.stats.seconds
+        doc["runs"].append(np.concatenate(indirect).round(5).tolist())
         summarise(doc)
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(path, json.dumps(doc) + "\n")
-        print(f"  {scene.name} {sky}: seed {len(doc['runs'])}, {r.stats.seconds:.1f} s, relative standard error "
+        print(f"  {scene.name} {sky}: seed {len(doc['runs'])}, {time.perf_counter() - t0:.0f} s so far, relative standard error "
               f"{100 * doc['relative_standard_error']['mean']:.2f} % mean", file=sys.stderr, flush=True)
     return summarise(doc)
 
