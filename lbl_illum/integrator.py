@@ -181,10 +181,11 @@ class IlluminanceResult:
         return luminance(self.rgb)
 
 
-#: Version of the rule that sizes records (part of the fingerprint: a cache file made
-#: with another rule is refused).  3: light limits from the portals in closed form
-#: inside, zones (docs/architecture.md, "Record domains").
-SIZING_VERSION = 3
+#: Version of the rules that make records' values and sizes (part of the fingerprint: a
+#: cache file made with other rules is refused).  3: light limits from the portals in
+#: closed form inside, zones (docs/architecture.md, "Record domains"); 4: the sun's images
+#: in mirrors and panes are direct light (lbl_illum.sunmirrors).
+SIZING_VERSION = 4
 
 
 def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
