@@ -332,11 +332,14 @@ def test_corpus_ladders():
     assert all(s.program == "lbl_illum" and s.args and not s.options for s in ours)
     assert 6 <= len(ours) <= 8 and len({s.key for s in ours}) == len(ours)
     (pure,) = [s for s in ours if s.family == "Monte Carlo"]
-    assert pure.args == ["--accuracy", "0", "--samples", "1024", "--point-samples", "0"]
+    assert pure.args == ["--accuracy", "0", "--samples", "1024", "--point-samples", "0", "--bounces", "10"]
     assert 1 <= len(cr.corpus_engine_ladder(quick=True)) <= 2
+    from lbl_illum.options import PRESETS
+
+    assert {p["bounces"] for p in PRESETS.values()} == {cr.CORPUS_BOUNCES}
     cube, zone = 120.0, (4 + 12 + 3) / 3
     theirs = cr.radiance_ladder(cr.CORPUS, cube=cube, zone_size=zone)
-    assert all(cr._arg(s.args, "-ab") == "9" and cr._arg(s.args, "-lw") == cr.LIMIT_WEIGHT for s in theirs)
+    assert all(cr._arg(s.args, "-ab") == "11" and cr._arg(s.args, "-lw") == cr.LIMIT_WEIGHT for s in theirs)
     cached = [s for s in theirs if cr._arg(s.args, "-aa") != "0"]
     assert [(float(cr._arg(s.args, "-aa")), int(cr._arg(s.args, "-ad"))) for s in cached] == \
         [(0.2, 512), (0.1, 1024), (0.1, 2048), (0.05, 2048), (0.05, 4096)]
@@ -477,7 +480,7 @@ def test_run_command_times_the_whole_command(tiny_case):
     assert row["mean_error"] == pytest.approx(np.mean(np.abs(err)), rel=1e-4)
     assert row["bias"] == pytest.approx(np.mean(err), rel=1e-4, abs=1e-6)
     assert row["records"] == sum(row["records_per_level"]) > 0 and row["rays"] > 0
-    assert row["settings"]["interpolation"] == "hessian" and row["settings"]["samples"] == 64
+    assert row["settings"]["interpolation"] == "gradients" and row["settings"]["samples"] == 64
     assert row["seconds"] == row["process_seconds"] > row["compute_seconds"] > 0
     assert row["maxrss_kib"] > 10 * 1024
     # a command that fails is a failed row, not an exception

@@ -36,7 +36,7 @@ and by how much?*
   ``python -m lbl_illum illuminance SCENE --points PTS -o OUT.csv FLAGS --stats S.json -q``
   from start to exit (``CORPUS_ENGINE_LADDER``: the four presets, two explicit
   ``--accuracy --samples --point-samples`` settings and pure Monte Carlo; one untimed
-  run per case first), Radiance's is ``oconv`` plus ``rtrace -ab 9 …``
+  run per case first), Radiance's is ``oconv`` plus ``rtrace -ab 11 …``
   (``RADIANCE_LADDERS["corpus"]``: five (-aa, -ad) pairs, ``-aa 0`` at three -ad).
   Compared at ``CORPUS_ERROR_LEVELS`` (5 %, 2 %, 1 %, 0.5 %); a run on corpus cases
   only writes ``OUT/radiance-comparison-corpus/`` (``CORPUS_NAME``), so it leaves the
@@ -304,6 +304,9 @@ def ambient_resolution(f: float, cube: float, zone_size: float) -> int:
     return max(1, int(f * cube / zone_size))
 
 
+#: Diffuse bounces on corpus cases: those of every preset (lbl_illum.options.PRESETS; a test
+#: keeps them equal), given to the explicit settings and, plus one, to Radiance's -ab.
+CORPUS_BOUNCES = 10
 #: Radiance's ladders per kind of scene: -ab of every run; (-aa, -ad) pairs at -as = -ad/2;
 #: then at (-aa 0.1, -ad 1024) one change at a time: -as 0 (at these -ad), -ab, -ar (as the
 #: factor f of :func:`ambient_resolution`; 8 otherwise); -aa 0 at these -ad.
@@ -317,8 +320,8 @@ RADIANCE_LADDERS = {
                   "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096)},
     "sphere-plane": {"ab": 1, "pairs": [(aa, ad) for aa in (0.2, 0.1, 0.05) for ad in (256, 1024, 4096)],
                      "as0": (1024,), "ab_ladder": (), "ar_ladder": (2, 32), "pure": (256, 1024, 4096, 16384)},
-    # corpus cases: -ab 9 = our 8 bounces (the sky is Radiance's first); kept to 8 runs a case
-    CORPUS: {"ab": 9, "pairs": [(0.2, 512), (0.1, 1024), (0.1, 2048), (0.05, 2048), (0.05, 4096)],
+    # corpus cases: -ab 11 = our presets' 10 bounces (the sky is Radiance's first); 8 runs a case
+    CORPUS: {"ab": CORPUS_BOUNCES + 1, "pairs": [(0.2, 512), (0.1, 1024), (0.1, 2048), (0.05, 2048), (0.05, 4096)],
              "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096, 16384)},
 }
 QUICK_RADIANCE_PAIRS = {"sphere-plane": [(0.2, 256), (0.1, 1024)], CORPUS: [(0.2, 512), (0.1, 1024)]}
@@ -367,7 +370,7 @@ def radiance_ladder(kind: str, cube: float, zone_size: float, quick: bool = Fals
 
 #: Our ladder on corpus cases, as ``lbl-illum illuminance`` flags: the presets, explicit
 #: (accuracy, samples, point samples) below and above them (the command's defaults
-#: otherwise: gradients interpolation, 8 bounces), pure Monte Carlo samples.
+#: otherwise: gradients interpolation; CORPUS_BOUNCES bounces), pure Monte Carlo samples.
 CORPUS_ENGINE_LADDER = {"presets": ("draft", "low", "medium", "high"),
                         "explicit": [(0.2, 64, 512), (0.08, 256, 4096)], "pure": (1024,)}
 QUICK_CORPUS_ENGINE_LADDER = {"presets": ("draft", "medium"), "explicit": [], "pure": ()}
@@ -379,7 +382,8 @@ CORPUS_PRIMERS = (["--accuracy", "0.3", "--samples", "16", "--point-samples", "1
 
 def explicit_flags(accuracy: float, samples: int, point_samples: int) -> list[str]:
     """``lbl-illum illuminance`` quality flags of an explicit setting."""
-    return ["--accuracy", f"{accuracy:g}", "--samples", str(samples), "--point-samples", str(point_samples)]
+    return ["--accuracy", f"{accuracy:g}", "--samples", str(samples), "--point-samples", str(point_samples),
+            "--bounces", str(CORPUS_BOUNCES)]
 
 
 def corpus_engine_ladder(quick: bool = False) -> list[Setting]:
@@ -1558,7 +1562,8 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
             "`lbl_illum.options.PRESETS`; explicit flags leave the rest at the command's defaults).",
             f"Radiance on corpus cases: the scene exported once by `lbl_illum.radiance.export_radiance` (glass as a "
             f"constant-coefficient BRTDfunc; export time not counted), then `oconv` (timed once per case) and "
-            f"`rtrace -I -h -n {args.processes}` with `-ab 9` (= our 8 bounces: Radiance counts the sky as one), "
+            f"`rtrace -I -h -n {args.processes}` with `-ab {CORPUS_BOUNCES + 1}` (= our {CORPUS_BOUNCES} bounces: Radiance "
+            "counts the sky as one), "
             f"`-lw {LIMIT_WEIGHT}`, (-aa, -ad) pairs with `-as` = -ad/2 and pure Monte Carlo `-aa 0` at rising "
             "-ad; a run's seconds are oconv's plus rtrace's (a user with a new scene runs both).",
             f"Every run is stopped after `--run-timeout` ({args.run_timeout:g} s) or past `--memory-limit` "
