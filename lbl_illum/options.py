@@ -119,7 +119,8 @@ def scene_defaults() -> "Options":
 
 def preset_table() -> str:
     """The presets and what they measured, as the command line's help prints them."""
-    lines = ["", "presets (accuracy / samples / bounces; measured on examples/office, 77 sensors, 2 cores):"]
+    lines = ["", "presets (accuracy / samples / bounces; measured on examples/office, 77 sensors, 2 cores, "
+             "seconds of calculation without start-up):"]
     for name, p in PRESETS.items():
         text = f"  {name:7s} a {p['accuracy']:g} / {p['samples']} / {p['bounces']}"
         if p["point_samples"]:
