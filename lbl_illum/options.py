@@ -101,10 +101,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 #: against the converged reference: (seconds, mean relative error, max relative error).
 #: Copied from docs/validation/office-tradeoff/results.json; a test keeps them equal.
 PRESET_MEASURED: dict[str, tuple[float, float, float]] = {
-    "draft": (2.46, 0.0057, 0.0198),
-    "low": (3.35, 0.0057, 0.0180),
-    "medium": (5.40, 0.0035, 0.0138),
-    "high": (14.99, 0.0031, 0.0131),
+    "draft": (1.65, 0.0057, 0.0198),
+    "low": (2.97, 0.0057, 0.0180),
+    "medium": (4.36, 0.0035, 0.0138),
+    "high": (12.41, 0.0031, 0.0131),
 }
 
 
