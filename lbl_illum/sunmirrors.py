@@ -54,6 +54,8 @@ class SunMirrors:
         tri = tracer.triangles
         kind = materials.kind[tri.material] if len(tri) else np.zeros(0, np.int8)
         ids = np.flatnonzero((kind == MIRROR) | (kind == GLASS))
+        if len(ids):                                # (a degenerate triangle has no plane)
+            ids = ids[np.linalg.norm(tracer.normals[ids], axis=1) > 0.5]
         self.planes: list[dict] = []
         self.dropped = 0
         #: (n_triangles,) int32: the plane of each reflecting triangle, −1 for the others
