@@ -19,9 +19,11 @@ office under a clear sky one such ray put 2.7e9 lux into a record on the ground 
 the window and 8,500 lux (+370 %) into a sensor.  So those rays add nothing
 (:meth:`Integrator.trace_paths`) and this estimate replaces them.  Not counted yet: the
 sun reflected by curved mirrors or panes, by two mirrors in a row, and by plastic's
-specular part (Radiance adds the sun's highlight where an indirect ray meets plastic; the
-images here do not; on the corpus plastic with a specular part covers 0–16 % of the
-surface area).
+specular part.  The last matters where glossy slats redirect the sun: with a shadow-ray
+highlight at each plastic lobe hit, the building-90 office's sunny hour (venetian blind,
+`medium`) reads 2,660 lux on average instead of 2,264 (+17 %); the LBNL office +0.16 %.
+Radiance's rtrace leaves it out as well (its pure Monte Carlo on the exported scene agrees
+with ours there within 0.7 %).
 
 Reflectors are grouped by plane (normals and offsets equal to 1e-4); a point is tested
 only against planes whose sun-side it lies on and where the reflected ray meets the
