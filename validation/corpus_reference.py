@@ -97,9 +97,10 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
               "direct_samples": DIRECT_SAMPLES, "sun_images": "virtual suns"}
     lbl = load_scene(files[sky])
     P, N = read_points(points_file, lbl.unit_scale)
-    if doc is not None and lbl.sun is None and {k: v for k, v in doc.get("estimator", {}).items()
-                                               if k not in ("direct_samples", "sun_images")} == \
-            {k: v for k, v in method.items() if k not in ("direct_samples", "sun_images")}:
+    def paths(estimator):               # what the sun's handling does not change
+        return {k: v for k, v in estimator.items() if k not in ("direct_samples", "sun_images")}
+
+    if doc is not None and lbl.sun is None and paths(doc.get("estimator", {})) == paths(method):
         # made before the direct light was split off or the sun's images were direct light:
         # without a sun neither changes anything
         doc["estimator"] = method
