@@ -11,9 +11,11 @@
   straddles the surface's horizon (|N·s| < sin δ, δ = 0.27° the disk's radius) each ray
   carries its own max(0, N·d): E = E_dn · mean(max(0, N·d) T(d)), the part below the
   horizon adding nothing.
-* The sun's images in flat mirrors and panes of glass (virtual suns,
+* The sun's images in flat mirrors, panes of glass and polished plastic (virtual suns,
   :mod:`lbl_illum.sunmirrors`): one direction over the disk per light sample, at most
   :data:`MAX_MIRROR_SAMPLES`.
+* The sun's highlight on rough plastic (:meth:`DirectLight.sun_highlight`): the luminance
+  a path sees at a glossy hit, by one shadow ray toward the disk.
 * Light surfaces (Lambertian emitters, two-sided): area sampling,
   E = (1/n) Σ L cos θ_r cos θ_l / d² / p_A, with triangles chosen in proportion to
   area × luminance and points uniform on them (Pharr, Jakob & Humphreys,
@@ -21,7 +23,7 @@
 
 The indirect calculation never counts these sources again: a hemisphere ray that
 reaches a light surface or the sun directly contributes nothing (paper §5), nor one that
-reaches the sun after a specular reflection.
+reaches the sun after a specular reflection (the images and highlights above count it).
 """
 
 from __future__ import annotations
@@ -29,10 +31,10 @@ from __future__ import annotations
 import numpy as np
 
 from .geometry import TriangleSampler
-from .materials import GLASS, LIGHT, MaterialTable
+from .materials import GLASS, LIGHT, MaterialTable, ward_brdf
 from .raycast import MAX_GLASS_LAYERS, SELF_HIT_EPSILON, Tracer
 from .sun import SUN_COS_HALF_ANGLE, Sun
-from .sunmirrors import SunMirrors
+from .sunmirrors import NOTE_SHARE, SunMirrors
 
 #: Shadow rays over the sun's disk, stratified (32 × 32), at sensor points the first rays
 #: found partly shaded: a penumbra, where a few random rays are off by tens of percent.
@@ -90,9 +92,10 @@ class DirectLight:
 
     def notes(self) -> list[str]:
         """What the user should hear of the direct light."""
-        if self.mirrors is not None and self.mirrors.dropped:
-            return [f"the sun's reflection is followed in the {len(self.mirrors)} largest planes of mirrors and "
-                    f"glass; {self.mirrors.dropped} smaller planes reflect no sun"]
+        if self.mirrors is not None and self.mirrors.dropped_share > NOTE_SHARE:
+            return [f"the sun's reflection is followed in the {len(self.mirrors)} largest planes of mirrors, glass "
+                    f"and polished plastic; {self.mirrors.dropped} smaller planes "
+                    f"({100 * self.mirrors.dropped_share:.0f} % of their area) reflect no sun"]
         return []
 
     @property
@@ -148,6 +151,35 @@ class DirectLight:
             for _ in range(light_samples):
                 E += self._light_sample(points, origins, shading_normals, rng) / light_samples
         return E
+
+    def sun_highlight(self, d, P, Ng, Ns, mat, rng: np.random.Generator) -> np.ndarray:
+        """(k, 3) luminance [cd/m²] of the sun reflected by the lobes of rough plastic hits.
+
+        d : (k, 3) arriving ray directions;  P, Ng, Ns : (k, 3) hit points [m] and normals
+        facing the rays;  mat : (k,) their (rough plastic) materials.  The sun disk of
+        luminance E_dn/Ω gives L = ∫_disk ρ_s f_s(v, ω) cos θ_ω E_dn/Ω dω; one direction s
+        drawn uniformly in the disk estimates it without bias as
+        ρ_s f_s(v, s) cos θ_s E_dn T(s) (:func:`~lbl_illum.materials.ward_brdf`), T the
+        transmittance of a shadow ray toward s (0 behind an opaque surface, τ(θ) through glass:
+        :meth:`transmittance`).  Used wherever a path meets rough plastic: camera rays
+        (:func:`lbl_illum.render.trace_view_paths`) and hemisphere rays
+        (:meth:`lbl_illum.integrator.Integrator.trace_paths`), whose continuations into the
+        lobe then count no sun.  Zero without a sun.
+        """
+        k = len(d)
+        L = np.zeros((k, 3))
+        if self.sun is None or k == 0:
+            return L
+        mats = self.materials
+        u = rng.random((2, k))
+        s = self.sun.sample_directions(u[0], u[1])
+        cos_s = np.einsum("ij,ij->i", Ns, s)
+        f = mats.specularity[mat] * ward_brdf(Ns, d, s, mats.roughness[mat])
+        use = np.flatnonzero(f * cos_s > 0.0)
+        if len(use):
+            T = self.transmittance(self.tracer.offset(P[use], Ng[use]), s[use])
+            L[use] = (self.sun.direct_normal_illuminance * f[use] * cos_s[use])[:, None] * T
+        return L
 
     def _sun_transmittance(self, origins, normals, cut, samples, rng, stratified=False):
         """Mean over ``samples`` shadow rays across the sun's disk of T(d) (times

@@ -184,8 +184,9 @@ class IlluminanceResult:
 #: Version of the rules that make records' values and sizes (part of the fingerprint: a
 #: cache file made with other rules is refused).  3: light limits from the portals in
 #: closed form inside, zones (docs/architecture.md, "Record domains"); 4: the sun's images
-#: in mirrors and panes are direct light (lbl_illum.sunmirrors).
-SIZING_VERSION = 4
+#: in mirrors and panes are direct light (lbl_illum.sunmirrors); 5: and in polished plastic,
+#: with the sun's highlight on rough plastic seen by hemisphere rays.
+SIZING_VERSION = 5
 
 
 def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
@@ -298,6 +299,8 @@ class Integrator:
         self._reflects = bool(specular.any())
         #: some plastic is hit: its specular branches play Russian roulette
         self._plastic = bool(np.any(self.materials.kind[used] == PLASTIC))
+        #: a sun and some rough plastic: paths meeting it see the sun's highlight
+        self._sun_glossy = self.direct.sun is not None and bool(np.any(self.materials.glossy[used]))
         #: some polished plastic's diffuse reflectance depends on the angle of incidence
         self._plastic_fresnel = bool(np.any(self.materials.plastic_fresnel[used]))
         #: elliptical record domains from the Hessian (``interpolation = "hessian"``)
@@ -346,9 +349,11 @@ class Integrator:
         """Whether records of level k can be non-zero (else they are never made)."""
         sky_light = not self.sky.is_dark
         if k == self.options.bounces:
-            # at the bounce limit a record sees the sky, the ambient value, and the sun or
-            # light surfaces by specular reflection (a mirror, the outside of a pane)
-            reflected_light = not self.direct.is_dark and self._reflects
+            # at the bounce limit a record sees the sky, the ambient value, light surfaces
+            # by specular reflection (a mirror, the outside of a pane) and the sun's
+            # highlight on rough plastic (the sun's images in flat reflectors are direct
+            # light at the hits, which the bounce limit does not reach)
+            reflected_light = (self.direct.has_lights and self._reflects) or self._sun_glossy
             return sky_light or self.options.ambient > 0 or reflected_light
         return sky_light or not self.direct.is_dark or self.options.ambient > 0
 
@@ -461,6 +466,13 @@ class Integrator:
             lit = np.flatnonzero((kind == LIGHT) & reflected[hit])
             if len(lit):
                 radiance[ray[hit[lit]]] += through[hit[lit]] * mats.luminance[mat[lit]]
+            # the sun's highlight on rough plastic, by a shadow ray (its lobe's continuation
+            # below counts no sun; polished plastic shows the sun as a virtual sun instead)
+            if self._sun_glossy:
+                gl = np.flatnonzero(mats.glossy[mat])
+                if len(gl):
+                    radiance[ray[hit[gl]]] += through[hit[gl]] * self.direct.sun_highlight(
+                        d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng)
             # specular surfaces continue (plastic: by reflection, into its lobe if rough)
             spec = np.flatnonzero(mats.continues[mat])
             if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:

@@ -96,7 +96,7 @@ import numpy as np
 from .cache import IrradianceCache
 from .errors import InputError, plural
 from .integrator import MAX_SPECULAR_DEPTH, Integrator
-from .materials import GLASS, LIGHT, MIRROR, PLASTIC, russian_roulette, ward_brdf
+from .materials import GLASS, LIGHT, MIRROR, PLASTIC, russian_roulette
 from .options import Options
 from .photometry import luminance
 from .progress import ProgressBar as _Bar
@@ -233,7 +233,7 @@ def _continue_specular(integ: Integrator, d, P, Ng, Ns, mat, through, rng, sun_d
     drawn from its lobe × ρ_s × the sample's weight (:meth:`MaterialTable.reflect`).
     Weak branches play Russian roulette (``WEIGHT_LIMIT``).  ``sun_done`` (k,) marks the
     hits whose ray must not count the sun disk; a continuation inherits it through glass,
-    gets True from rough plastic (whose sun highlight :func:`_sun_highlight` took) and
+    gets True from rough plastic (whose sun highlight :meth:`DirectLight.sun_highlight` took) and
     False from any other reflection.
     """
     mats = integ.materials
@@ -253,31 +253,6 @@ def _continue_specular(integ: Integrator, d, P, Ng, Ns, mat, through, rng, sun_d
     rows, directions, side, new_through, done = rows[keep], directions[keep], side[keep], new_through[keep], done[keep]
     origins = integ.tracer.offset(P[rows], side)
     return rows, origins, directions, new_through, done
-
-
-def _sun_highlight(integ: Integrator, d, P, Ng, Ns, mat, rng) -> np.ndarray:
-    """(k, 3) luminance [cd/m²] of the sun reflected by the lobes of rough plastic hits.
-
-    d : (k, 3) arriving ray directions;  P, Ng, Ns : (k, 3) hit points [m] and normals
-    facing the rays;  mat : (k,) their (rough plastic) materials.  The sun disk of
-    luminance E_dn/Ω gives L = ∫_disk ρ_s f_s(v, ω) cos θ_ω E_dn/Ω dω; one direction s
-    drawn uniformly in the disk estimates it without bias as
-    ρ_s f_s(v, s) cos θ_s E_dn T(s) (:func:`~lbl_illum.materials.ward_brdf`), T the
-    transmittance of a shadow ray toward s (0 behind an opaque surface, τ(θ) through glass:
-    :meth:`DirectLight.transmittance`).
-    """
-    mats, sun = integ.materials, integ.sun
-    k = len(d)
-    L = np.zeros((k, 3))
-    u = rng.random((2, k))
-    s = sun.sample_directions(u[0], u[1])
-    cos_s = np.einsum("ij,ij->i", Ns, s)
-    f = mats.specularity[mat] * ward_brdf(Ns, d, s, mats.roughness[mat])
-    use = np.flatnonzero(f * cos_s > 0.0)
-    if len(use):
-        T = integ.direct.transmittance(integ.tracer.offset(P[use], Ng[use]), s[use])
-        L[use] = (sun.direct_normal_illuminance * f[use] * cos_s[use])[:, None] * T
-    return L
 
 
 def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndarray, rng: np.random.Generator,
@@ -360,8 +335,8 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
         if sun is not None:
             gl = np.flatnonzero(mats.glossy[mat])
             if len(gl):
-                _scatter_add(radiance, ray[hit[gl]], through[hit[gl]] * _sun_highlight(
-                    integ, d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng))
+                _scatter_add(radiance, ray[hit[gl]], through[hit[gl]] * integ.direct.sun_highlight(
+                    d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng))
         # -- mirrors, glass and plastic's specular part continue
         spec = np.flatnonzero(mats.continues[mat])
         if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:

@@ -1,29 +1,28 @@
-"""The sun reflected by flat mirrors and panes of glass: virtual suns.
+"""The sun reflected by flat mirrors, panes of glass and polished plastic: virtual suns.
 
-A flat specular reflector (a ``mirror``, or the front reflection of a ``glass`` pane)
-seen from a point P along u = s − 2 (s·n) n, s the direction to the sun and n the
-reflector's normal, shows P the sun's image.  The illuminance it adds at P is
+A flat specular reflector (a ``mirror``, the front reflection of a ``glass`` pane, or the
+specular part of polished ``plastic``) seen from a point P along u = s − 2 (s·n) n, s the
+direction to the sun and n the reflector's normal, shows P the sun's image.  The
+illuminance it adds at P is
 
     E = E_dn · ρ(θ) · max(0, N·u) · T(X → sun),
 
 X the point where the ray from P along u meets the reflector, ρ(θ) its specular
 reflectance at the sun's angle of incidence (:meth:`MaterialTable.specular`: a mirror's
-ρ, a pane's Fresnel or constant reflectance) and T the transmittance from X to the sun
-(0 behind an opaque surface, the product of the panes crossed).  This is the "virtual
-light source" of Radiance's ``mirror`` material (G. J. Ward, "The RADIANCE Lighting
-Simulation and Rendering System", SIGGRAPH 1994, §2.2), applied here to panes as well.
+ρ, a pane's Fresnel or constant reflectance, plastic's ρ_s(θ)) and T the transmittance
+from X to the sun (0 behind an opaque surface, the product of the panes crossed).  This
+is the "virtual light source" of Radiance's ``mirror`` material (G. J. Ward, "The RADIANCE
+Lighting Simulation and Rendering System", SIGGRAPH 1994, §2.2), applied here to panes and
+polished plastic as well.
 
 Hemisphere rays could find the same light by reaching the sun's 6.8e-5 sr disk after a
 reflection, but only one ray in about 10⁵ does, carrying 10⁵ times the rest: on the
 office under a clear sky one such ray put 2.7e9 lux into a record on the ground outside
 the window and 8,500 lux (+370 %) into a sensor.  So those rays add nothing
-(:meth:`Integrator.trace_paths`) and this estimate replaces them.  Not counted yet: the
-sun reflected by curved mirrors or panes, by two mirrors in a row, and by plastic's
-specular part.  The last matters where glossy slats redirect the sun: with a shadow-ray
-highlight at each plastic lobe hit, the building-90 office's sunny hour (venetian blind,
-`medium`) reads 2,660 lux on average instead of 2,264 (+17 %); the LBNL office +0.16 %.
-Radiance's rtrace leaves it out as well (its pure Monte Carlo on the exported scene agrees
-with ours there within 0.7 %).
+(:meth:`Integrator.trace_paths`) and this estimate replaces them.  Rough plastic's lobe
+is too wide for an image: paths that meet it take the sun's highlight by a shadow ray
+(:meth:`lbl_illum.direct.DirectLight.sun_highlight`).  Not counted: the sun reflected by
+curved mirrors or panes, and by two mirrors in a row.
 
 Reflectors are grouped by plane (normals and offsets equal to 1e-4); a point is tested
 only against planes whose sun-side it lies on and where the reflected ray meets the
@@ -35,13 +34,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from .materials import GLASS, MIRROR, MaterialTable
+from .materials import GLASS, MIRROR, PLASTIC, MaterialTable
 from .raycast import SELF_HIT_EPSILON, Tracer
 
 __all__ = ["SunMirrors", "MAX_PLANES"]
 
-#: Most reflector planes kept (the largest by area); a scene with more is told so.
+#: Most reflector planes kept (the largest by area); a scene whose others hold more than
+#: :data:`NOTE_SHARE` of the reflecting area is told so.
 MAX_PLANES = 64
+#: Share of the reflecting area left out above which the user hears of it.
+NOTE_SHARE = 0.01
 #: Normals and offsets (as fractions of the scene's length scale) that round to the same
 #: multiple of this make one plane.
 PLANE_TOLERANCE = 1e-4
@@ -55,11 +57,13 @@ class SunMirrors:
         self.materials = materials
         tri = tracer.triangles
         kind = materials.kind[tri.material] if len(tri) else np.zeros(0, np.int8)
-        ids = np.flatnonzero((kind == MIRROR) | (kind == GLASS))
+        polished = (kind == PLASTIC) & (materials.specularity[tri.material] > 0.0) & ~materials.glossy[tri.material]
+        ids = np.flatnonzero((kind == MIRROR) | (kind == GLASS) | polished)
         if len(ids):                                # (a degenerate triangle has no plane)
             ids = ids[np.linalg.norm(tracer.normals[ids], axis=1) > 0.5]
         self.planes: list[dict] = []
         self.dropped = 0
+        self.dropped_share = 0.0
         #: (n_triangles,) int32: the plane of each reflecting triangle, −1 for the others
         self.plane_of = np.full(len(tri), -1, np.int32)
         if len(ids) == 0:
@@ -76,6 +80,8 @@ class SunMirrors:
         order = np.argsort(-np.bincount(group, weights=area))
         keep = order[:MAX_PLANES]
         self.dropped = int(len(order) - len(keep))
+        #: share of the reflecting area in the planes left out (curved or small surfaces)
+        self.dropped_share = float(1.0 - np.bincount(group, weights=area)[keep].sum() / area.sum())
         for g in keep:
             sel = np.flatnonzero(group == g)
             w = area[sel] / area[sel].sum()

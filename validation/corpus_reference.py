@@ -54,6 +54,10 @@ MIN_SEEDS = 8
 #: Shadow rays per sensor for the direct light (a 64 × 64 stratified grid over the sun's disk;
 #: the sun's images in mirrors and panes, lbl_illum.sunmirrors, with 16 of them).
 DIRECT_SAMPLES = 4096
+#: How the sun reaches the sensors after a specular reflection (lbl_illum.sunmirrors): its
+#: images in flat mirrors, panes and polished plastic are direct light, its highlight on
+#: rough plastic is seen by the paths.
+SUN_IMAGES = "virtual suns in mirrors, panes and polished plastic; highlights on rough plastic"
 #: Sensors per engine call: pure Monte Carlo shares nothing between sensors, and every hit
 #: of every sensor's rays keeps a record until the call ends (the cabin's 40 sensors at
 #: once took more than 13 GB).
@@ -77,6 +81,15 @@ def summarise(doc: dict) -> dict:
     return doc
 
 
+def specular_plastic(scene) -> bool:
+    """Some plastic of the scene has a specular part (it reflects the sun)."""
+    from lbl_illum.materials import PLASTIC
+
+    table = scene.material_table
+    used = np.unique(scene.triangles.material)
+    return bool(np.any((table.kind[used] == PLASTIC) & (table.specularity[used] > 0.0)))
+
+
 def direct_light(scene, P, N) -> np.ndarray:
     """(n,) direct illuminance [lux] at the sensors from the sun and light surfaces."""
     from lbl_illum.integrator import Integrator
@@ -94,15 +107,18 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
     path = reference_path(scene, sky)
     doc = json.loads(path.read_text()) if path.is_file() else None
     method = {"point_samples": POINT_SAMPLES, "samples": HIT_SAMPLES, "bounces": BOUNCES,
-              "direct_samples": DIRECT_SAMPLES, "sun_images": "virtual suns"}
+              "direct_samples": DIRECT_SAMPLES, "sun_images": SUN_IMAGES}
     lbl = load_scene(files[sky])
     P, N = read_points(points_file, lbl.unit_scale)
     def paths(estimator):               # what the sun's handling does not change
         return {k: v for k, v in estimator.items() if k not in ("direct_samples", "sun_images")}
 
-    if doc is not None and lbl.sun is None and paths(doc.get("estimator", {})) == paths(method):
-        # made before the direct light was split off or the sun's images were direct light:
-        # without a sun neither changes anything
+    old = {} if doc is None else doc.get("estimator", {})
+    if doc is not None and paths(old) == paths(method) and (
+            lbl.sun is None or (old.get("sun_images") == "virtual suns" and not specular_plastic(lbl))):
+        # made before the direct light was split off or the sun's images were direct light
+        # (without a sun neither changes anything), or before plastic reflected the sun
+        # (without specular plastic that changes nothing)
         doc["estimator"] = method
     if doc is None or doc.get("estimator") != method:
         doc = {"scene": str(files[sky].relative_to(ROOT)), "points": str(points_file.relative_to(ROOT)),
