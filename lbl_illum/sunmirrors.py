@@ -33,6 +33,7 @@ points that can see a reflection.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .materials import GLASS, MIRROR, PLASTIC, MaterialTable
 from .raycast import SELF_HIT_EPSILON, Tracer
@@ -67,6 +68,7 @@ class SunMirrors:
         #: (n_triangles,) int32: the plane of each reflecting triangle, −1 for the others
         self.plane_of = np.full(len(tri), -1, np.int32)
         if len(ids) == 0:
+            self._pack()
             return
         n = tracer.normals[ids].astype(np.float64)
         big = np.argmax(np.abs(n), axis=1)
@@ -92,6 +94,14 @@ class SunMirrors:
             self.plane_of[ids[sel]] = len(self.planes)
             self.planes.append({"normal": normal, "offset": float(np.dot(normal, pts.mean(axis=0))),
                                 "lo": pts.min(axis=0) - pad, "hi": pts.max(axis=0) + pad})
+        self._pack()
+
+    def _pack(self) -> None:
+        """The planes as arrays for :func:`_candidates`."""
+        self._normals = np.array([p["normal"] for p in self.planes], np.float64).reshape(-1, 3)
+        self._offsets = np.array([p["offset"] for p in self.planes], np.float64)
+        self._lo = np.array([p["lo"] for p in self.planes], np.float64).reshape(-1, 3)
+        self._hi = np.array([p["hi"] for p in self.planes], np.float64).reshape(-1, 3)
 
     def __len__(self) -> int:
         return len(self.planes)
@@ -106,31 +116,78 @@ class SunMirrors:
         transmittance of :class:`lbl_illum.direct.DirectLight`."""
         origins = np.asarray(origins, np.float64)
         E = np.zeros((len(origins), 3))
-        for k, plane in enumerate(self.planes):
-            nrm = plane["normal"]
-            s_n = sun_directions @ nrm
-            side = origins @ nrm - plane["offset"]
-            t = np.divide(side, s_n, out=np.full(len(side), -1.0), where=np.abs(s_n) > 1e-9)
-            u = sun_directions - 2.0 * s_n[:, None] * nrm
-            c_n = float(sun_centre @ nrm)
-            cos_p = normals @ (sun_centre - 2.0 * c_n * nrm)
-            X = origins + t[:, None] * u
-            inside = np.all((X >= plane["lo"]) & (X <= plane["hi"]), axis=1)
-            cand = np.flatnonzero((t > 0.0) & (cos_p > 0.0) & inside)
-            if len(cand) == 0:
-                continue
-            hits = self.tracer.intersect(origins[cand], u[cand])
-            ok = hits.hit.copy()
-            ok[ok] = self.plane_of[hits.prim[ok]] == k
-            cand, prim, t_hit = cand[ok], hits.prim[ok], hits.t[ok]
-            if len(cand) == 0:
-                continue
-            s = sun_directions[cand]
-            mat = self.tracer.triangles.material[prim]
-            rho = self.materials.specular(mat, np.full(len(cand), abs(c_n)))[1]
-            back = np.sign(side[cand])[:, None] * nrm                     # the reflector's side of P
-            X = origins[cand] + t_hit[:, None] * u[cand]
-            step = SELF_HIT_EPSILON * (np.abs(X).max(axis=1) + self.tracer.length_scale)
-            T = transmittance(X + step[:, None] * back, s)
-            E[cand] += direct_normal_illuminance * rho * cos_p[cand, None] * T
+        if len(origins) == 0:
+            return E
+        sun_directions = np.ascontiguousarray(sun_directions, np.float64)
+        nrm = self._normals
+        c_n = nrm @ np.asarray(sun_centre, np.float64)                           # (planes,)
+        mirrored = sun_centre[None, :] - 2.0 * c_n[:, None] * nrm                 # (planes, 3)
+        point, plane, side, cos_p = _candidates(origins, sun_directions, np.ascontiguousarray(normals, np.float64),
+                                                mirrored, nrm, self._offsets, self._lo, self._hi)
+        if len(point) == 0:
+            return E
+        s = sun_directions[point]
+        u = s - 2.0 * np.einsum("ij,ij->i", s, nrm[plane])[:, None] * nrm[plane]
+        hits = self.tracer.intersect(origins[point], u)
+        ok = hits.hit.copy()
+        ok[ok] = self.plane_of[hits.prim[ok]] == plane[ok]
+        point, plane, side, cos_p, u, s, prim, t_hit = (point[ok], plane[ok], side[ok], cos_p[ok], u[ok], s[ok],
+                                                        hits.prim[ok], hits.t[ok])
+        if len(point) == 0:
+            return E
+        mat = self.tracer.triangles.material[prim]
+        rho = self.materials.specular(mat, np.abs(c_n[plane]))[1]
+        back = np.sign(side)[:, None] * nrm[plane]                            # the reflector's side of P
+        X = origins[point] + t_hit[:, None] * u
+        step = SELF_HIT_EPSILON * (np.abs(X).max(axis=1) + self.tracer.length_scale)
+        T = transmittance(X + step[:, None] * back, s)
+        add = direct_normal_illuminance * rho * cos_p[:, None] * T
+        for c in range(3):                      # (in plane order at each point)
+            E[:, c] = np.bincount(point, add[:, c], minlength=len(E))
         return E
+
+
+@njit(cache=True)
+def _candidates(origins, sun_directions, normals, mirrored, plane_normals, offsets, lo, hi):
+    """(point, plane, side, cos) of the pairs where a point may see the sun in a plane: it
+    faces the mirrored direction of the disk's centre (cos = N·``mirrored[plane]`` > 0),
+    lies on the plane's sun side (side = signed distance, same sign as s·n, so the ray along
+    the mirrored direction u of its disk direction s meets the plane at t = side / (s·n) > 0),
+    and that meeting point lies in the plane's box."""
+    n, m = len(origins), len(plane_normals)
+    count = 0
+    for stage in range(2):
+        if stage == 1:
+            point = np.empty(count, np.int64)
+            plane = np.empty(count, np.int64)
+            side_out = np.empty(count)
+            cos_out = np.empty(count)
+            count = 0
+        for i in range(n):
+            for k in range(m):
+                cos = normals[i, 0] * mirrored[k, 0] + normals[i, 1] * mirrored[k, 1] + normals[i, 2] * mirrored[k, 2]
+                if cos <= 0.0:
+                    continue
+                s_n = (sun_directions[i, 0] * plane_normals[k, 0] + sun_directions[i, 1] * plane_normals[k, 1]
+                       + sun_directions[i, 2] * plane_normals[k, 2])
+                if abs(s_n) <= 1e-9:
+                    continue
+                side = (origins[i, 0] * plane_normals[k, 0] + origins[i, 1] * plane_normals[k, 1]
+                        + origins[i, 2] * plane_normals[k, 2]) - offsets[k]
+                t = side / s_n
+                if t <= 0.0:
+                    continue
+                inside = True
+                for c in range(3):
+                    x = origins[i, c] + t * (sun_directions[i, c] - 2.0 * s_n * plane_normals[k, c])
+                    if x < lo[k, c] or x > hi[k, c]:
+                        inside = False
+                        break
+                if inside:
+                    if stage == 1:
+                        point[count] = i
+                        plane[count] = k
+                        side_out[count] = side
+                        cos_out[count] = cos
+                    count += 1
+    return point, plane, side_out, cos_out
