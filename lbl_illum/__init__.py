@@ -8,14 +8,13 @@ The public surface::
     result.illuminance            # (n,) lux
 """
 
-__version__ = "0.1.0"
-
-from .cache import IrradianceCache  # noqa: E402
+from ._version import __version__  # noqa: E402
+from .engine.cache import IrradianceCache  # noqa: E402
 from .errors import InputError  # noqa: E402
-from .integrator import IlluminanceResult, Integrator, compute_illuminance  # noqa: E402
-from .options import Options  # noqa: E402
-from .scene import Scene, load_scene  # noqa: E402
-from .sensors import read_points, write_results  # noqa: E402
+from .engine.integrator import IlluminanceResult, Integrator, compute_illuminance  # noqa: E402
+from .engine.options import Options  # noqa: E402
+from .scene.scenefile import Scene, load_scene  # noqa: E402
+from .io.points import read_points, write_results  # noqa: E402
 
 __all__ = ["__version__", "IrradianceCache", "InputError", "IlluminanceResult", "Integrator",
            "compute_illuminance", "Options", "Scene", "load_scene", "read_points", "write_results"]

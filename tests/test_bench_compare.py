@@ -276,7 +276,7 @@ def test_rad_presets_on_the_office(tmp_path):
     import subprocess
 
     from lbl_illum import load_scene, read_points
-    from lbl_illum.radiance import export_radiance, radiance_programs
+    from lbl_illum.io.radiance import export_radiance, radiance_programs
 
     scene = load_scene(ROOT / "examples" / "office" / "scene.toml")
     points, normals = read_points(ROOT / "examples" / "office" / "grid.pts", scene.unit_scale)
@@ -334,7 +334,7 @@ def test_corpus_ladders():
     (pure,) = [s for s in ours if s.family == "Monte Carlo"]
     assert pure.args == ["--accuracy", "0", "--samples", "1024", "--point-samples", "0", "--bounces", "10"]
     assert 1 <= len(cr.corpus_engine_ladder(quick=True)) <= 2
-    from lbl_illum.options import PRESETS
+    from lbl_illum.engine.options import PRESETS
 
     assert {p["bounces"] for p in PRESETS.values()} == {cr.CORPUS_BOUNCES}
     cube, zone = 120.0, (4 + 12 + 3) / 3
@@ -490,7 +490,7 @@ def test_run_command_times_the_whole_command(tiny_case):
 
 
 def test_radiance_time_on_a_corpus_case_adds_oconv(tiny_case):
-    from lbl_illum.radiance import radiance_programs
+    from lbl_illum.io.radiance import radiance_programs
 
     programs = radiance_programs()
     if programs is None:

@@ -16,11 +16,11 @@ import re
 import numpy as np
 import pytest
 
-from lbl_illum.cli import main
+from lbl_illum.cli.main import main
 from lbl_illum.errors import InputError
-from lbl_illum.files import atomic_write_bytes, atomic_write_text
-from lbl_illum.scene import MAX_BOUNCES, load_scene, scene_from_dict
-from lbl_illum.sensors import read_points
+from lbl_illum.io.files import atomic_write_bytes, atomic_write_text
+from lbl_illum.scene.scenefile import MAX_BOUNCES, load_scene, scene_from_dict
+from lbl_illum.io.points import read_points
 
 # a 1 m square floor under a uniform sky
 GOOD = """\
@@ -105,7 +105,7 @@ def prepare(folder, scene=GOOD, points=GOOD_POINTS, files=None):
 def cache_file(**edit):
     """A function writing a one-record cache file with the module's own writer (so its
     checksum is right) whose arrays ``edit`` changes: a file no run wrote."""
-    from lbl_illum.cache import CACHE_FORMAT, CacheData, write_cache_file
+    from lbl_illum.engine.cache import CACHE_FORMAT, CacheData, write_cache_file
 
     def write(path):
         arrays = {"L0_P": np.zeros((1, 3)), "L0_N": np.array([[0, 0, 1]], np.float32),
@@ -497,7 +497,7 @@ def test_every_command_leaves_its_outputs_alone(tmp_path, capsys, command, fault
 ])
 def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch, size, expect):
     """With 1 GiB said to be available: nothing is read, rendered or written."""
-    import lbl_illum.render as render
+    import lbl_illum.engine.render as render
 
     monkeypatch.setattr(render, "_available_memory", lambda: 2 ** 30)
     monkeypatch.setattr(render, "render_command", lambda args: pytest.fail("render started"))
@@ -507,7 +507,7 @@ def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch,
 
 
 def test_render_sizes_that_fit_go_ahead(tmp_path, capsys, monkeypatch):
-    import lbl_illum.render as render
+    import lbl_illum.engine.render as render
 
     started = []
     monkeypatch.setattr(render, "_available_memory", lambda: 2 ** 30)

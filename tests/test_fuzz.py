@@ -34,11 +34,11 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from lbl_illum.cache import CacheData, IrradianceCache, LevelRecords, write_cache_file
+from lbl_illum.engine.cache import CacheData, IrradianceCache, LevelRecords, write_cache_file
 from lbl_illum.errors import InputError
-from lbl_illum.geometry import MAX_COORDINATE
-from lbl_illum.scene import Scene, load_scene, scene_from_dict
-from lbl_illum.sensors import MIN_NORMAL, read_points
+from lbl_illum.scene.geometry import MAX_COORDINATE
+from lbl_illum.scene.scenefile import Scene, load_scene, scene_from_dict
+from lbl_illum.io.points import MIN_NORMAL, read_points
 
 DATA = Path(__file__).parent / "data"
 
@@ -448,8 +448,8 @@ def test_pts_reader_on_any_floats(folder, rows):
 def cache_files(tmp_path_factory):
     """Two small valid cache files (round and elliptical record domains) of a box room
     with a window, at low settings; their bytes and their parsed header and arrays."""
-    from lbl_illum.integrator import Integrator
-    from lbl_illum.options import Options
+    from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.engine.options import Options
 
     data = {"geometry": [{"shape": "box", "center": [0, 0, 1.5], "size": [4, 4, 3], "material": "wall"},
                          {"shape": "rectangle", "origin": [-1, -2, 1], "u": [2, 0, 0], "v": [0, 0, 1],
@@ -593,7 +593,7 @@ def _unit(v):
 def _records(rng, n, spread, shaped):
     """Records like a cache's: half on a floor facing up, half anywhere, radii over two
     decades; with ``shaped`` elliptical axes and leak masks as well."""
-    from lbl_illum.hemisphere import orthonormal_basis
+    from lbl_illum.engine.hemisphere import orthonormal_basis
 
     P = rng.uniform(-spread, spread, (n, 3))
     P[: n // 2, 2] = 0.0

@@ -43,7 +43,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "validation"))
 
 from lbl_illum import Options, compute_illuminance, load_scene, read_points  # noqa: E402
-from lbl_illum.files import atomic_write_text  # noqa: E402
+from lbl_illum.io.files import atomic_write_text  # noqa: E402
 from lbl_illum.photometry import luminance  # noqa: E402
 from studies.corpus_scenes import SKIES, cases, prepare, reference_path  # noqa: E402
 
@@ -52,9 +52,9 @@ POINT_SAMPLES, HIT_SAMPLES, BOUNCES, SEED_BASE = 4096, 4, 12, 5000
 #: Fewest seeds of a reference (its standard error is itself estimated from them).
 MIN_SEEDS = 8
 #: Shadow rays per sensor for the direct light (a 64 × 64 stratified grid over the sun's disk;
-#: the sun's images in mirrors and panes, lbl_illum.sunmirrors, with 16 of them).
+#: the sun's images in mirrors and panes, lbl_illum.engine.sunmirrors, with 16 of them).
 DIRECT_SAMPLES = 4096
-#: How the sun reaches the sensors after a specular reflection (lbl_illum.sunmirrors): its
+#: How the sun reaches the sensors after a specular reflection (lbl_illum.engine.sunmirrors): its
 #: images in flat mirrors, panes and polished plastic are direct light, its highlight on
 #: rough plastic is seen by the paths.
 SUN_IMAGES = "virtual suns in mirrors, panes and polished plastic; highlights on rough plastic"
@@ -83,7 +83,7 @@ def summarise(doc: dict) -> dict:
 
 def specular_plastic(scene) -> bool:
     """Some plastic of the scene has a specular part (it reflects the sun)."""
-    from lbl_illum.materials import PLASTIC
+    from lbl_illum.scene.materials import PLASTIC
 
     table = scene.material_table
     used = np.unique(scene.triangles.material)
@@ -92,7 +92,7 @@ def specular_plastic(scene) -> bool:
 
 def direct_light(scene, P, N) -> np.ndarray:
     """(n,) direct illuminance [lux] at the sensors from the sun and light surfaces."""
-    from lbl_illum.integrator import Integrator
+    from lbl_illum.engine.integrator import Integrator
 
     integ = Integrator(scene, options(SEED_BASE - 1))
     if integ.direct.is_dark:
@@ -152,7 +152,7 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
 
 def radiance_check(scene, sky: str, doc: dict) -> dict:
     """Radiance's pure Monte Carlo on the exported scene against the reference."""
-    from lbl_illum.radiance import illuminance_from_rtrace, radiance_programs
+    from lbl_illum.io.radiance import illuminance_from_rtrace, radiance_programs
 
     files, points_file = prepare(scene)
     work = Path(tempfile.mkdtemp(prefix="corpus-rad-"))

@@ -464,7 +464,7 @@ def grid_text(points: np.ndarray) -> str:
 
 def write(out: Path, target: int) -> dict:
     """Generate the scene for about ``target`` triangles into ``out``; return a summary."""
-    from lbl_illum.files import atomic_write_bytes, atomic_write_text
+    from lbl_illum.io.files import atomic_write_bytes, atomic_write_text
 
     t0 = time.perf_counter()
     detail = detail_for(target)

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from lbl_illum import Options
-from lbl_illum.integrator import RunStats
+from lbl_illum.engine.integrator import RunStats
 from lbl_illum_studies import extremes as ex
 from lbl_illum_studies.report import StudyContext
-from lbl_illum.sun import SUN_SOLID_ANGLE, Sun
+from lbl_illum.daylight.sun import SUN_SOLID_ANGLE, Sun
 
 
 @pytest.fixture(scope="module")

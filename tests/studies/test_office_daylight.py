@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from lbl_illum.errors import InputError
-from lbl_illum.radiance import radiance_programs
+from lbl_illum.io.radiance import radiance_programs
 from lbl_illum_studies import office_daylight as od
 from lbl_illum_studies.report import StudyContext
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from lbl_illum import read_points
-from lbl_illum.cache import LevelRecords
+from lbl_illum.engine.cache import LevelRecords
 from lbl_illum.errors import InputError
 from lbl_illum_studies import scene_requires as sr
 from lbl_illum_studies.report import StudyContext

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from lbl_illum.sky import UniformSky
+from lbl_illum.daylight.sky import UniformSky
 from lbl_illum_studies import sky_component as sc
 from lbl_illum_studies.report import StudyContext
 

@@ -58,7 +58,7 @@ the indirect calculation only), so ``-ab n`` follows n − 1 reflections, like o
 ``ar = f · cube / zone`` with cube the octree's size and zone the room's mean side, so
 that the smallest record radius, ``aa · cube / ar`` (Radiance's ambient.c), is
 ``aa · zone / f`` whatever the size of the ground around the room.  The scene goes to
-Radiance through ``lbl_illum.radiance.export_radiance`` with ``glass = "brtdfunc"``,
+Radiance through ``lbl_illum.io.radiance.export_radiance`` with ``glass = "brtdfunc"``,
 our angle-independent glass exactly, so the two programs solve the same problem.
 
 **Measured per run.**  Each run is a child process whose resources are read with
@@ -304,7 +304,7 @@ def ambient_resolution(f: float, cube: float, zone_size: float) -> int:
     return max(1, int(f * cube / zone_size))
 
 
-#: Diffuse bounces on corpus cases: those of every preset (lbl_illum.options.PRESETS; a test
+#: Diffuse bounces on corpus cases: those of every preset (lbl_illum.engine.options.PRESETS; a test
 #: keeps them equal), given to the explicit settings and, plus one, to Radiance's -ab.
 CORPUS_BOUNCES = 10
 #: Radiance's ladders per kind of scene: -ab of every run; (-aa, -ad) pairs at -as = -ad/2;
@@ -931,7 +931,7 @@ def prepare_furnished(build: Path, triangles: int, remake: bool, minutes: float,
         if len(doc["illuminance"]) != len(points) or doc.get("triangles") != len(scene.triangles):
             say(f"{path.name} does not match the generated scene: remaking it")
             doc = None
-    from lbl_illum.files import atomic_write_text
+    from lbl_illum.io.files import atomic_write_text
 
     if doc is None:
         doc = make_furnished_reference(scene, points, normals, folder, minutes, programs, say)
@@ -1083,7 +1083,7 @@ def radiance_difference(scene, points, normals, folder: Path, programs, referenc
 
 def radiance_check(scene, points, normals, folder: Path, programs) -> dict:
     """One Radiance run at ``RADIANCE_CHECK`` on a fresh export: illuminance [lux], seconds."""
-    from lbl_illum.radiance import export_radiance, illuminance_from_rtrace
+    from lbl_illum.io.radiance import export_radiance, illuminance_from_rtrace
 
     ex = export_radiance(scene, folder, points, normals, glass="brtdfunc")
     oconv = _program(ex.oconv_command(), programs)
@@ -1105,7 +1105,7 @@ def _program(cmd: list[str], programs: dict) -> list[str]:
 
 def _env(programs: dict, export) -> dict:
     """Radiance's environment with the export folder first on RAYPATH."""
-    from lbl_illum.radiance import radiance_programs
+    from lbl_illum.io.radiance import radiance_programs
 
     found = radiance_programs(export.directory)
     return found["env"] if found is not None else programs["env"]
@@ -1132,7 +1132,7 @@ class Runner:
         """Export the scene (glass as BRTDfunc), compile the octree; the cube size,
         export and oconv seconds."""
         from lbl_illum import load_scene
-        from lbl_illum.radiance import export_radiance
+        from lbl_illum.io.radiance import export_radiance
 
         b = self.bench
         scene = load_scene(b.scene_path)
@@ -1174,7 +1174,7 @@ class Runner:
         if m.returncode != 0:
             row.update(failed=True, error=failure(m), elapsed=m.seconds)
             return row
-        from lbl_illum.radiance import illuminance_from_rtrace
+        from lbl_illum.io.radiance import illuminance_from_rtrace
 
         values = illuminance_from_rtrace(m.stdout.decode())
         records = 0
@@ -1559,8 +1559,8 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
             "kinds before the first case) fills the kernel cache.  Illuminance: column `illuminance` of the CSV; "
             "records: the sum over levels of `records` in the stats, rays: `rays`; “compute” is the stats' "
             f"`compute_seconds`.  FLAGS: {'; '.join(f'`{s.label}`' for s in ladder)} (the presets are "
-            "`lbl_illum.options.PRESETS`; explicit flags leave the rest at the command's defaults).",
-            f"Radiance on corpus cases: the scene exported once by `lbl_illum.radiance.export_radiance` (glass as a "
+            "`lbl_illum.engine.options.PRESETS`; explicit flags leave the rest at the command's defaults).",
+            f"Radiance on corpus cases: the scene exported once by `lbl_illum.io.radiance.export_radiance` (glass as a "
             f"constant-coefficient BRTDfunc; export time not counted), then `oconv` (timed once per case) and "
             f"`rtrace -I -h -n {args.processes}` with `-ab {CORPUS_BOUNCES + 1}` (= our {CORPUS_BOUNCES} bounces: Radiance "
             "counts the sky as one), "
@@ -1742,7 +1742,7 @@ def compare(args) -> int:
         return 0
     from tqdm import tqdm
 
-    from lbl_illum.radiance import radiance_programs
+    from lbl_illum.io.radiance import radiance_programs
 
     t_start = time.perf_counter()
     build = Path(args.build)

@@ -141,7 +141,7 @@ def measure(case: dict) -> dict:
     """One timed calculation; ``case`` = {scene, points (None: the scene's grid.pts) or n,
     options (dict)}.  Returns seconds of each stage, records, rays and peak memory."""
     from lbl_illum import Options, load_scene, read_points
-    from lbl_illum.integrator import Integrator
+    from lbl_illum.engine.integrator import Integrator
 
     options = Options(**case["options"])
     # warm-up on the bare office: numba kernels loaded or compiled, thread pool started
@@ -478,7 +478,7 @@ def _section_triangles(report, res, rep):
 # ---------------------------------------------------------------------------------------
 
 def parse_args(argv=None):
-    from lbl_illum.options import PRESETS
+    from lbl_illum.engine.options import PRESETS
 
     parser = argparse.ArgumentParser(
         prog="cost_growth.py",

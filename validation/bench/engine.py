@@ -12,7 +12,7 @@ default settings):
    1e-4 m along the surface normal, cosine-distributed about it -- traced straight
    through ``embreex`` with nothing around it: closest hit (``output=1``) on one thread
    and on a thread pool (embreex releases the GIL), and the ``OCCLUDED`` query on two
-   threads.  Chunks are 32768 rays, as in :mod:`lbl_illum.raycast`.
+   threads.  Chunks are 32768 rays, as in :mod:`lbl_illum.engine.raycast`.
 3. **Ratio** engine rays/s / raw Embree rays/s (closest hit, 2 threads).  It says
    how much of the engine's time is spent tracing rays; the target is >= 0.5, i.e.
    at most half of the time in Python, numpy and numba around the ray casts.
@@ -53,15 +53,15 @@ from embreex.mesh_construction import TriangleMesh
 import numba
 
 from lbl_illum import Options, load_scene, read_points
-from lbl_illum.options import PRESETS
-from lbl_illum.integrator import Integrator
-from lbl_illum.raycast import thread_count
+from lbl_illum.engine.options import PRESETS
+from lbl_illum.engine.integrator import Integrator
+from lbl_illum.engine.raycast import thread_count
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_SCENE = ROOT / "examples" / "office" / "scene.toml"
 DEFAULT_POINTS = ROOT / "examples" / "office" / "grid.pts"
 
-#: Rays per embree call, as in lbl_illum.raycast.CHUNK_RAYS.
+#: Rays per embree call, as in lbl_illum.engine.raycast.CHUNK_RAYS.
 CHUNK_RAYS = 32768
 #: Most raw rays traced per measurement (memory and time bound).
 MAX_RAW_RAYS = 4_000_000

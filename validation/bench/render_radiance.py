@@ -11,7 +11,7 @@ one run, and
   pixels (the arbiter: which program is nearer the truth);
 * both are timed (target: ours faster).
 
-**Scene for Radiance.**  ``lbl_illum.radiance.export_radiance`` with glass ``auto``: the
+**Scene for Radiance.**  ``lbl_illum.io.radiance.export_radiance`` with glass ``auto``: the
 office's glazing (``model = "constant"``) becomes a ``BRTDfunc`` with constant specular
 reflectance and transmittance, our glass exactly; ``oconv`` compiles it once.
 
@@ -23,8 +23,8 @@ measure the programs rather than rpict's sampling noise) and ``fine`` (a = 0.1, 
 samples).
 
 **Matched settings.**  Ours: the setting, ``point_samples`` dropped as for every image
-(``lbl_illum.render.image_options``), 1 sample per pixel.
-``rpict``: ``lbl_illum.radiance.ambient_options`` for the same options — ``-ab
+(``lbl_illum.engine.render.image_options``), 1 sample per pixel.
+``rpict``: ``lbl_illum.io.radiance.ambient_options`` for the same options — ``-ab
 bounces+1`` (Radiance counts the sky, a ``glow`` found only by the indirect
 calculation, as a bounce), ``-aa accuracy``, ``-ad samples``, ``-as 0``, ``-lw 1e-5``,
 and ``-ar`` making Radiance's largest record radius (64 · cube / ar, ambient.c
@@ -38,7 +38,7 @@ thread, so ours is timed on 2 threads and on 1 (``LBL_ILLUM_THREADS=1``,
 ``NUMBA_NUM_THREADS=1`` and the child pinned to one core).
 
 **Pixels compared.**  The rays through the pixel centres are traced once
-(:class:`lbl_illum.raycast.Tracer`); a pixel counts when its first hit is a diffuse
+(:class:`lbl_illum.engine.raycast.Tracer`); a pixel counts when its first hit is a diffuse
 material and the 3 × 3 block around it hits the same plane of the same material (no
 edge whose position within the pixel matters, no window, sky or light pixel).  Our
 renderer jitters its one sample per pixel; rpict's ``-pj 0`` shoots through the
@@ -125,7 +125,7 @@ def engine_options(setting: dict):
     """Our image options for one ``SETTINGS`` entry (the scene's settings, the preset, then
     the explicit fields, without point_samples)."""
     from lbl_illum import load_scene
-    from lbl_illum.render import image_options
+    from lbl_illum.engine.render import image_options
 
     scene = load_scene(SCENE)
     fields = dict(setting)
@@ -136,7 +136,7 @@ def engine_options(setting: dict):
 
 def rpict_options(options, max_spacing: float, cube: float, lr: int = RPICT_LR) -> list[str]:
     """rpict's ambient options matched to ours (module text)."""
-    from lbl_illum.radiance import ambient_options
+    from lbl_illum.io.radiance import ambient_options
 
     return ambient_options(options, max_spacing, cube) + ["-lr", str(lr)]
 
@@ -150,8 +150,8 @@ def centre_hits(scene, view, width: int, height: int) -> dict:
     material, whether diffuse, and the mask of pixels whose 3 × 3 block sees one plane
     of one diffuse material (module text).  Arrays are (height, width, ...)."""
     from lbl_illum import Options
-    from lbl_illum.integrator import Integrator
-    from lbl_illum.materials import DIFFUSE
+    from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.scene.materials import DIFFUSE
 
     integ = Integrator(scene, Options(accuracy=0.0, samples=4, bounces=0))
     origins, directions, valid = view.rays(width, height)           # no rng: pixel centres
@@ -207,7 +207,7 @@ def reference_luminance(scene, hits: dict, pixels: np.ndarray, samples: int, see
     """Pure Monte Carlo luminance L = ρ/π · E [cd/m²] at the pixels' centre hits, mean
     and standard error over ``seeds``."""
     from lbl_illum import Options
-    from lbl_illum.integrator import Integrator
+    from lbl_illum.engine.integrator import Integrator
 
     r, c = pixels[:, 0], pixels[:, 1]
     P, N, rho = hits["P"][r, c], hits["N"][r, c], hits["rho"][r, c]
@@ -236,8 +236,8 @@ def worker(spec_path: str) -> int:
         os.sched_setaffinity(0, {int(spec["cpu"])})
     t0 = time.perf_counter()
     from lbl_illum import Options, load_scene
-    from lbl_illum.render import render
-    from lbl_illum.views import view_from_string
+    from lbl_illum.engine.render import render
+    from lbl_illum.scene.views import view_from_string
 
     scene = load_scene(spec["scene"])
     view = view_from_string(spec["view"])
@@ -289,7 +289,7 @@ def run_ours(options, width: int, height: int, folder: Path, threads: int, tag: 
 
 def prepare_radiance(scene, folder: Path, programs) -> dict:
     """Export the office, compile the octree; the export, its environment and the cube size [m]."""
-    from lbl_illum.radiance import export_radiance, radiance_programs
+    from lbl_illum.io.radiance import export_radiance, radiance_programs
 
     target = folder / "radiance"
     if target.exists():
@@ -367,7 +367,7 @@ def radiance_mc(rad: dict, programs, hits: dict, pixels: np.ndarray) -> dict:
     if proc.returncode != 0:
         raise RuntimeError(f"rtrace: {proc.stderr[-300:]}")
     rgb = np.array(proc.stdout.split(), np.float64).reshape(-1, 3)
-    from lbl_illum.radiance import RADIANCE_RGB_WEIGHTS
+    from lbl_illum.io.radiance import RADIANCE_RGB_WEIGHTS
 
     return {"L": 179.0 * rgb @ np.array(RADIANCE_RGB_WEIGHTS), "seconds": seconds,
             "command": "rtrace -h -ov -n 2 " + " ".join(RADIANCE_MC) + " scene.oct"}
@@ -498,8 +498,8 @@ def main(argv=None) -> int:
     if args.worker:
         return worker(args.worker)
     from lbl_illum import load_scene
-    from lbl_illum.radiance import radiance_programs
-    from lbl_illum.views import view_from_string
+    from lbl_illum.io.radiance import radiance_programs
+    from lbl_illum.scene.views import view_from_string
 
     programs = radiance_programs()
     if programs is None:
@@ -620,7 +620,7 @@ def sensor_check(scene, hits: dict, pixels: np.ndarray, ref: np.ndarray, options
     with gradient interpolation: L = ρ/π · E against the reference."""
     import dataclasses
 
-    from lbl_illum.integrator import Integrator
+    from lbl_illum.engine.integrator import Integrator
 
     r, c = pixels[:, 0], pixels[:, 1]
     P, N, rho = hits["P"][r, c], hits["N"][r, c], hits["rho"][r, c]
@@ -706,7 +706,7 @@ def write_report(args, results: dict, rows, mask, pixels, seconds: float) -> Pat
         "`-ab 9` at 7 bounces (see Findings).",
         "Glass: " + ("the export wrote the office's constant glazing as a BRTDfunc with constant coefficients, "
                      "our glass exactly." if results["glass_brtdfunc"] else "not a BRTDfunc (check the export)."),
-        "Ours: `lbl_illum.render.render` with the options shown, 1 jittered sample per pixel; the 1-thread run "
+        "Ours: `lbl_illum.engine.render.render` with the options shown, 1 jittered sample per pixel; the 1-thread run "
         "with LBL_ILLUM_THREADS=1, NUMBA_NUM_THREADS=1, pinned to one core.",
     ])
     report.heading("Pixels compared and the reference")
@@ -856,7 +856,7 @@ def findings(results: dict) -> list[str]:
             f"{_pct(d['default -ar 64']['vs_reference']['median'])}), which puts our `low` image "
             f"{_pct(apart)}"
             " from it on average: the earlier finding's direction and most of its size (the rest of its settings are "
-            "not recorded).  `lbl_illum.radiance.ambient_options` therefore always writes `-ar` (the "
+            "not recorded).  `lbl_illum.io.radiance.ambient_options` therefore always writes `-ar` (the "
             "matched value, or rtrace's default 256 when the spacing is unknown).  With rpict's default `-lr 7` as well the two errors partly cancel "
             f"({_pct(d['default -ar 64 and -lr 7']['vs_reference']['mean'])}).  With matched `-ar`, `-lr 7` changes "
             f"rpict's mean by {_pct(d['-lr 7']['vs_reference']['mean'] - S['low']['rpict_vs_reference']['mean'], 2)} "

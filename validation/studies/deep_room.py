@@ -33,8 +33,8 @@ import time
 import numpy as np
 
 from lbl_illum import Options, compute_illuminance
-from lbl_illum.options import PRESETS
-from lbl_illum.scene import scene_from_dict
+from lbl_illum.engine.options import PRESETS
+from lbl_illum.scene.scenefile import scene_from_dict
 
 from .report import Report, StudyContext, fmt, new_figure, pct
 
@@ -326,9 +326,9 @@ less: its deeper levels are one-ray paths, which do not draw portal samples, and
 directly under a small solid angle.""")
     if pays:
         rep.text("""Portals pay here, so glass is a portal unless its material says `portal = false`
-(`lbl_illum.materials.DEFAULT_GLASS_PORTAL`).  An unglazed opening has no surface to mark: it
+(`lbl_illum.scene.materials.DEFAULT_GLASS_PORTAL`).  An unglazed opening has no surface to mark: it
 needs a `[[portals]]` entry (docs/windows.md).""")
     else:
-        rep.text("""Portals do not pay here at equal time: `lbl_illum.materials.DEFAULT_GLASS_PORTAL` should be
+        rep.text("""Portals do not pay here at equal time: `lbl_illum.scene.materials.DEFAULT_GLASS_PORTAL` should be
 reconsidered.""")
     return rep

@@ -16,7 +16,7 @@ looks down on the table from the south-east.
 
 **What is measured.**
 
-1. The image with the cache (:func:`lbl_illum.render.render`, one jittered sample
+1. The image with the cache (:func:`lbl_illum.engine.render.render`, one jittered sample
    per pixel) and its rays R.
 2. Pure Monte Carlo (``accuracy = 0``: every pixel's hit gets its own Eq. 2
    hemisphere of S rays, deeper bounces one path ray each) with S chosen so that its
@@ -43,12 +43,12 @@ from pathlib import Path
 import numpy as np
 
 from lbl_illum import Options
-from lbl_illum.images import preview_pixels
-from lbl_illum.integrator import Integrator
+from lbl_illum.io.images import preview_pixels
+from lbl_illum.engine.integrator import Integrator
 from lbl_illum.photometry import luminance
-from lbl_illum.render import image_options, render
-from lbl_illum.scene import scene_from_dict
-from lbl_illum.views import View
+from lbl_illum.engine.render import image_options, render
+from lbl_illum.scene.scenefile import scene_from_dict
+from lbl_illum.scene.views import View
 
 from .report import Report, StudyContext, fmt, new_figure, pct
 
@@ -282,7 +282,7 @@ def _write(report: Report, res: dict, plan: dict, cached, mc, mask, S) -> None:
 The paper's Figure 5 shows blocks on a table lit by a low-angle light (5a), where the
 cache placed its values (5b), and a pure Monte Carlo image made with as many rays
 (5c), whose speckle "results from inadequate integration of the indirect contributions
-at each pixel".  This study renders the same kind of scene with `lbl_illum.render`
+at each pixel".  This study renders the same kind of scene with `lbl_illum.engine.render`
 and measures both claims: the pixel noise in flat regions at equal rays, and where the
 records go.
 

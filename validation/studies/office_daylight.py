@@ -4,7 +4,7 @@ horizon blend changes.
 The tool (``compute_illuminance`` at the scene defaults, the ``high`` preset) and
 Radiance 6's ``rtrace -I`` compute the illuminance at the 77 workplane sensors of
 ``examples/office`` on the same scene: the Radiance scene is the tool's own export
-(:func:`lbl_illum.radiance.export_radiance`), in which the sky is our sky model written in
+(:func:`lbl_illum.io.radiance.export_radiance`), in which the sky is our sky model written in
 Radiance's ``.cal`` language (``lbl_sky.cal``), the glass the Radiance material with the same
 optics, and the sun a ``light`` source of the same solid angle and normal illuminance.  Two
 skies (issue 5 §5):
@@ -62,9 +62,9 @@ import numpy as np
 
 from lbl_illum import compute_illuminance, load_scene, read_points
 from lbl_illum.errors import InputError
-from lbl_illum.options import DEFAULT_PRESET, PRESET_MEASURED
+from lbl_illum.engine.options import DEFAULT_PRESET, PRESET_MEASURED
 from lbl_illum.photometry import luminance
-from lbl_illum.radiance import export_radiance, illuminance_from_rtrace, radiance_programs, to_radiance
+from lbl_illum.io.radiance import export_radiance, illuminance_from_rtrace, radiance_programs, to_radiance
 
 from . import repository_root
 from .report import Report, StudyContext, error_summary, fmt, new_figure, pct

@@ -282,7 +282,7 @@ class StudyContext:
             self.on_plan(self.planned)
 
     def step(self, label: str, stats=None) -> None:
-        """One run done; ``stats`` (a :class:`lbl_illum.integrator.RunStats`) adds its
+        """One run done; ``stats`` (a :class:`lbl_illum.engine.integrator.RunStats`) adds its
         rays and records to the totals."""
         self.runs += 1
         if stats is not None:

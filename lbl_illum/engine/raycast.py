@@ -1,0 +1,351 @@
+"""Ray casting with Embree (through embreex), on arrays of rays.
+
+Embree works in float32 and embreex fixes each ray's ``tnear`` at 0, so a ray
+leaving a surface must start a little off it.  This module owns that problem:
+
+* hit points are reconstructed in float64 as ``o + t d`` and then projected onto
+  the plane of the triangle hit (so their distance from the surface is float64
+  round-off, not float32); hit points on sphere primitives are projected onto the
+  true sphere, whose normal is the shading normal;
+* a ray leaving a surface point P starts at ``P + ε n`` with n the geometric normal
+  on the side the ray leaves towards and ``ε = SELF_HIT_EPSILON · (|P|∞ + ℓ)``,
+  ℓ the scene's median edge length: scale-aware, so the same room in mm or km
+  behaves the same.
+
+Shadow rays use Embree's ``OCCLUDED`` query against the opaque surfaces only, and
+glass along a shadow ray multiplies it by the glass's transmittance.
+
+embreex releases the GIL inside ``run``, so large batches are split into chunks
+traced by a thread pool and every core is used.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numba import prange
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
+
+from .compiled import PARALLEL_MIN, serial_and_parallel
+from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
+from .hemisphere import orthonormal_basis
+from ..scene.materials import GLASS
+
+__all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count"]
+
+#: Relative offset of ray origins off the surface they leave (see module docstring).
+SELF_HIT_EPSILON = 1e-5
+#: A sensor closer than this fraction of its ε to a surface in front of it lies on that
+#: surface (embree's float32 distances for such a point are a few ulps, ~1e-7 relative).
+ON_SURFACE_FRACTION = 0.05
+#: Glass layers a shadow ray may cross before it is considered blocked.
+MAX_GLASS_LAYERS = 16
+#: Rays per chunk handed to one embree call from one thread.
+CHUNK_RAYS = 32768
+
+
+def thread_count() -> int:
+    """Threads used for ray casting: ``$LBL_ILLUM_THREADS`` or every core."""
+    env = os.environ.get("LBL_ILLUM_THREADS")
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            pass
+    return max(1, os.cpu_count() or 1)
+
+
+@lru_cache(maxsize=4)
+def _pool(threads: int) -> ThreadPoolExecutor:
+    return ThreadPoolExecutor(max_workers=threads, thread_name_prefix="lbl-illum-trace")
+
+
+def _plane_hits_kernel(o, d, t, prim, index, normals, v0, p, ng):
+    """Hit points o + t d projected onto the plane of the triangle hit (float64), and its
+    normal turned towards the incoming ray."""
+    for q in prange(index.shape[0]):
+        i = index[q]
+        f = prim[i]
+        nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
+        x = o[i, 0] + t[i] * d[i, 0]
+        y = o[i, 1] + t[i] * d[i, 1]
+        z = o[i, 2] + t[i] * d[i, 2]
+        h = (x - v0[f, 0]) * nx + (y - v0[f, 1]) * ny + (z - v0[f, 2]) * nz
+        p[q, 0] = x - h * nx
+        p[q, 1] = y - h * ny
+        p[q, 2] = z - h * nz
+        if nx * d[i, 0] + ny * d[i, 1] + nz * d[i, 2] > 0.0:
+            nx, ny, nz = -nx, -ny, -nz
+        ng[q, 0] = nx
+        ng[q, 1] = ny
+        ng[q, 2] = nz
+
+
+_plane_hits = serial_and_parallel(_plane_hits_kernel)
+
+
+@dataclass
+class Hits:
+    """Result of a batch of closest-hit queries.
+
+    t : (n,) float64 — distance along the (unit) direction, ``inf`` for a miss
+    prim : (n,) int32 — index of the triangle hit, -1 for a miss
+    """
+
+    t: np.ndarray
+    prim: np.ndarray
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.prim >= 0
+
+
+def _embree_scene(vertices: np.ndarray):
+    if len(vertices) == 0:
+        return None
+    scene = rtcore_scene.EmbreeScene()
+    TriangleMesh(scene, np.ascontiguousarray(vertices, dtype=np.float32))
+    return scene
+
+
+class Tracer:
+    """Closest-hit and shadow queries against a scene's triangles.
+
+    Parameters
+    ----------
+    triangles : the scene's geometry [m]
+    material_kind : (m,) int8 material kind per material id (``materials.GLASS`` …)
+    transmittance : (m, 3) float64 glass transmittance per material id
+    threads : worker threads (default :func:`thread_count`)
+    """
+
+    def __init__(self, triangles: Triangles, material_kind: np.ndarray, transmittance: np.ndarray,
+                 threads: int | None = None):
+        self.triangles = triangles
+        self.threads = threads or thread_count()
+        self.rays_traced = 0
+        verts = triangles.vertices
+        kind = np.asarray(material_kind)[triangles.material]
+        self._glass_ids = np.flatnonzero(kind == GLASS).astype(np.int32)
+        self._opaque_ids = np.flatnonzero(kind != GLASS).astype(np.int32)
+        self._all = _embree_scene(verts)
+        self._opaque = _embree_scene(verts[self._opaque_ids])
+        self._glass = _embree_scene(verts[self._glass_ids])
+        self._glass_tau = np.asarray(transmittance, dtype=np.float64)[triangles.material[self._glass_ids]]
+        self.normals = np.ascontiguousarray(triangles.normals, np.float64)
+        self._v0 = np.ascontiguousarray(verts[:, 0], np.float64)
+        self._has_spheres = bool(np.any(triangles.sphere >= 0))
+        edges = np.linalg.norm(verts[:, 1] - verts[:, 0], axis=1)
+        self.length_scale = float(np.median(edges)) if len(edges) else 1.0
+
+    # -- low level ----------------------------------------------------------
+    def _run(self, scene, origins, directions, tmax, occluded):
+        """Trace through ``scene`` in chunks on the thread pool."""
+        n = len(origins)
+        self.rays_traced += n
+        o = np.ascontiguousarray(origins, dtype=np.float32)
+        d = np.ascontiguousarray(directions, dtype=np.float32)
+        dist = None if tmax is None else np.ascontiguousarray(np.minimum(tmax, 3e38), dtype=np.float32)
+        if occluded:
+            out = np.empty(n, dtype=bool)
+        else:
+            t_out = np.empty(n, dtype=np.float64)
+            p_out = np.empty(n, dtype=np.int32)
+
+        def work(s):
+            ds = None if dist is None else dist[s]
+            if occluded:
+                out[s] = scene.run(o[s], d[s], dists=ds, query="OCCLUDED") != -1
+            else:
+                res = scene.run(o[s], d[s], dists=ds, output=1)
+                prim = res["primID"]
+                t_out[s] = np.where(prim >= 0, res["tfar"], np.inf)
+                p_out[s] = prim
+
+        chunk = max(4096, min(CHUNK_RAYS, -(-n // self.threads)))
+        slices = [slice(i, min(n, i + chunk)) for i in range(0, n, chunk)]
+        if len(slices) <= 1:
+            for s in slices:
+                work(s)
+        else:
+            list(_pool(self.threads).map(work, slices))
+        return out if occluded else (t_out, p_out)
+
+    # -- queries --------------------------------------------------------------
+    def intersect(self, origins: np.ndarray, directions: np.ndarray) -> Hits:
+        """Closest hit of (n, 3) rays with unit ``directions`` against every surface."""
+        if len(origins) == 0 or self._all is None:
+            return Hits(np.full(len(origins), np.inf), np.full(len(origins), -1, np.int32))
+        t, prim = self._run(self._all, origins, directions, None, occluded=False)
+        return Hits(t, prim)
+
+    def transmittance(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray | None = None) -> np.ndarray:
+        """(n, 3) fraction of light passing along each segment: 0 if an opaque surface
+        blocks it, else the product of the transmittances of the glass it crosses."""
+        n = len(origins)
+        result = np.ones((n, 3))
+        if n == 0:
+            return result
+        if tmax is None:
+            tmax = np.full(n, np.inf)
+        if self._opaque is not None:
+            blocked = self._run(self._opaque, origins, directions, tmax, occluded=True)
+            result[blocked] = 0.0
+        if self._glass is None:
+            return result
+        live = np.flatnonzero(result[:, 0] > 0)
+        o = np.asarray(origins, dtype=np.float64)[live]
+        d = np.asarray(directions, dtype=np.float64)[live]
+        tm = np.asarray(tmax, dtype=np.float64)[live]
+        for _ in range(MAX_GLASS_LAYERS):
+            if len(live) == 0:
+                break
+            t, prim = self._run(self._glass, o, d, tm, occluded=False)
+            crossed = prim >= 0
+            live, o, d, tm, t, prim = live[crossed], o[crossed], d[crossed], tm[crossed], t[crossed], prim[crossed]
+            result[live] *= self._glass_tau[prim]
+            step = t + SELF_HIT_EPSILON * (np.abs(o).max(axis=1) + t + self.length_scale)
+            o = o + step[:, None] * d
+            tm = tm - step
+        else:
+            result[live] = 0.0     # more layers than a window has: treat as blocked
+        return result
+
+    # -- hit geometry -----------------------------------------------------------
+    def surface(self, origins: np.ndarray, directions: np.ndarray, hits: Hits, index: np.ndarray | None = None):
+        """Positions and normals at the hits of the rays selected by ``index``.
+
+        Returns ``(points, geometric_normals, shading_normals)``, each (k, 3) float64,
+        with both normals turned to face the incoming ray (surfaces are two-sided).
+        """
+        if index is None:
+            index = np.flatnonzero(hits.hit)
+        index = np.asarray(index, np.int64)
+        p = np.empty((len(index), 3))
+        ng = np.empty((len(index), 3))
+        _plane_hits[len(index) >= PARALLEL_MIN](np.ascontiguousarray(origins, np.float64),
+                                                np.ascontiguousarray(directions, np.float64),
+                                                hits.t, hits.prim, index, self.normals, self._v0, p, ng)
+        ns = ng.copy()
+        if not self._has_spheres:
+            return p, ng, ns
+        d = np.asarray(directions, dtype=np.float64)[index]
+        sphere = self.triangles.sphere[hits.prim[index]]
+        on_sphere = np.flatnonzero(sphere >= 0)
+        if len(on_sphere):
+            c = self.triangles.sphere_center[sphere[on_sphere]]
+            r = self.triangles.sphere_radius[sphere[on_sphere]]
+            radial = p[on_sphere] - c
+            radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+            p[on_sphere] = c + r[:, None] * radial                     # onto the true sphere
+            outward = np.einsum("ij,ij->i", radial, d[on_sphere]) < 0.0
+            ns[on_sphere] = np.where(outward[:, None], radial, -radial)
+            ng[on_sphere] = ns[on_sphere]
+        return p, ng, ns
+
+    def offset(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        """Ray origins just off the surface at ``points`` on the side of ``normals``.
+
+        Points on a sphere primitive's true surface that leave towards its inside get
+        ``SPHERE_MAX_DEVIATION`` · radius more: the facets lie up to that far inside the
+        true sphere, so the plain offset would leave the origin between the true sphere
+        and the facets, where every ray and shadow ray hits the sphere's own facet.
+        """
+        points = np.asarray(points, dtype=np.float64)
+        normals = np.asarray(normals, dtype=np.float64)
+        eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        for c, r in zip(self.triangles.sphere_center, self.triangles.sphere_radius):
+            radial = points - c
+            dist = np.linalg.norm(radial, axis=1)
+            on = np.abs(dist - r) <= 2.0 * SPHERE_MAX_DEVIATION * r + eps
+            inward = np.einsum("ij,ij->i", radial, normals) < 0.0
+            eps = eps + np.where(on & inward, SPHERE_MAX_DEVIATION * r, 0.0)
+        return points + eps[:, None] * normals
+
+    def sensor_origins(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        """Ray origins for sensor points: :meth:`offset`, kept clear of the surfaces near them.
+
+        The offset ε·n (ε = ``SELF_HIT_EPSILON`` · (|P|∞ + ℓ)) suits a point on a surface.
+        A sensor can also lie just in front of a surface or on an edge, and then:
+
+        * a surface less than ε in front of it is crossed (a sensor 1 mm from a 200 m
+          wall and facing it, where ε = 3 mm, saw the sky behind the wall);
+        * on an edge or in a corner the origin lies in the plane of the adjacent
+          surface, and rays slip through between its triangles (a sensor in the floor
+          corner of a closed room saw the sun and the sky outside).
+
+        Probe rays correct this; a distance below ``ON_SURFACE_FRACTION``·ε counts as 0
+        (float32 round-off), i.e. the point lies on that surface.
+
+        1. Along n from P: a surface at 0 < t < 2ε (not parallel to n) puts the origin
+           halfway to it, P + t/2·n.  Facets of a sphere the point lies on are passed,
+           as :meth:`offset` does.
+        2. If a probe along ±t₁ or ±t₂ (the tangent plane) from the origin meets a
+           surface at t = 0, the origin lies in that surface's plane.  It then moves ε
+           within the tangent plane, in the first of 12 directions (30° apart) from
+           which no such probe meets a surface at t = 0 and a probe along −n still meets
+           the surface the sensor lies on: off the edge, into the face.  A sensor on no
+           surface has no such direction and keeps its origin.
+        3. Along ±t₁, ±t₂ again: a surface whose plane lies 0 < d < ε from the origin
+           pushes it along that surface's normal, turned towards it, to ε from the plane.
+
+        points, normals : (n, 3) [m] and unit; returns (n, 3) origins [m].
+        """
+        points = np.asarray(points, dtype=np.float64)
+        normals = np.asarray(normals, dtype=np.float64)
+        origins = self.offset(points, normals)
+        if len(points) == 0 or self._all is None:
+            return origins
+        eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        zero = ON_SURFACE_FRACTION * eps
+        # 1. a surface just in front
+        hits = self.intersect(points, normals)
+        t, prim = hits.t, np.maximum(hits.prim, 0)
+        facing = np.abs(np.einsum("ij,ij->i", self.normals[prim], normals)) > 1e-6
+        ahead = hits.hit & facing & (t > zero) & (t < 2.0 * eps)
+        sphere = np.where(ahead, self.triangles.sphere[prim], -1)
+        for s in np.unique(sphere[sphere >= 0]):
+            c, r = self.triangles.sphere_center[s], self.triangles.sphere_radius[s]
+            on = np.abs(np.linalg.norm(points - c, axis=1) - r) <= 2.0 * SPHERE_MAX_DEVIATION * r + eps
+            ahead &= ~((sphere == s) & on)
+        origins[ahead] = points[ahead] + 0.5 * t[ahead, None] * normals[ahead]
+        t1, t2 = orthonormal_basis(normals)
+
+        def in_a_plane(o, i):
+            """Which origins ``o`` of points ``i`` lie in the plane of a surface beside them."""
+            out = np.zeros(len(i), bool)
+            for u in (t1[i], -t1[i], t2[i], -t2[i]):
+                out |= self.intersect(o, u).t <= zero[i]
+            return out
+
+        # 2. an origin in the plane of an adjacent surface: off the edge, into the face
+        todo = np.flatnonzero(in_a_plane(origins, np.arange(len(points))))
+        if len(todo):
+            lift = np.linalg.norm(origins[todo] - points[todo], axis=1)
+            for angle in np.radians(np.arange(0.0, 360.0, 30.0) + 15.0):
+                if len(todo) == 0:
+                    break
+                step = np.cos(angle) * t1[todo] + np.sin(angle) * t2[todo]
+                c = origins[todo] + eps[todo, None] * step
+                back = self.intersect(c, -normals[todo])
+                ok = ~in_a_plane(c, todo) & (back.t <= lift + zero[todo])
+                origins[todo[ok]] = c[ok]
+                todo, lift = todo[~ok], lift[~ok]
+        # 3. a surface nearer than ε beside the origin
+        for u in (t1, -t1, t2, -t2):
+            hits = self.intersect(origins, u)
+            near = np.flatnonzero(hits.t < 2.0 * eps)
+            if len(near) == 0:
+                continue
+            ns = self.normals[hits.prim[near]]
+            cos = np.einsum("ij,ij->i", ns, u[near])
+            ns = np.where((cos > 0.0)[:, None], -ns, ns)               # towards the origin
+            d = hits.t[near] * np.abs(cos)
+            push = np.where(d > zero[near], np.maximum(eps[near] - d, 0.0), 0.0)
+            origins[near] += push[:, None] * ns
+        return origins

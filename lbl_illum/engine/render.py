@@ -1,0 +1,711 @@
+"""Luminance images through the irradiance cache (the paper's §2 and §3; DESIGN.md §3).
+
+A pixel's value is the luminance [cd/m²] seen along its camera rays, averaged over
+``pixel_samples`` jittered rays per pixel.  Each camera ray is followed by ray casting
+(Whitted, "An improved illumination model for shaded display", CACM 1980; the paper's
+§2) until it ends:
+
+========================  ==============================================================
+the ray meets             it carries (times the throughput of the specular chain)
+========================  ==============================================================
+nothing (escapes)         the sky's luminance, or the ground glow below the horizon;
+                          plus the sun's luminance E_dn/Ω inside its 6.8e-5 sr disk
+a ``light`` surface       the surface's luminance (two-sided Lambertian emitter)
+a ``diffuse`` surface     L = ρ/π · E(P, N): E is the *full* illuminance at the hit P on
+                          the side N facing the ray — direct light from the sun and the
+                          light surfaces by shadow rays plus the indirect part
+                          interpolated from the cache (the paper's secondary method,
+                          Eq. 5) or computed as new records (Eq. 2) where none is valid
+a ``mirror``              the ray reflects about the surface normal; throughput × ρ
+``glass`` (thin panes)    the ray splits: transmitted straight on (× τ) and reflected
+                          (× ρ), both followed (as Radiance's ``rpict`` does); τ and ρ at
+                          the ray's angle of incidence (:mod:`lbl_illum.scene.materials`)
+``plastic``               both: a diffuse hit with ρ_d (as a diffuse surface), and the
+                          specular part continued — polished: the mirror direction × ρ_s(θ);
+                          rough: one direction drawn from Ward's lobe × ρ_s × its weight,
+                          plus the sun's highlight by a shadow ray (below)
+========================  ==============================================================
+
+Emitters are counted wherever a camera path meets them — directly, through glass or
+in a mirror: the cache's §5 rule (a hemisphere ray that meets a light adds nothing,
+the direct step counted it) is about the *illuminance* at a diffuse point and is kept
+inside E; a camera ray is not part of any illuminance integral.
+
+**One batch per stage.**  All pixels × samples are traced at once (DESIGN.md §3):
+camera rays → specular continuations, depth by depth (at most
+``MAX_SPECULAR_DEPTH`` = 8 interactions, as the integrator's hemisphere rays) → the
+diffuse hits of every path, which go to :meth:`Integrator.compute` together.  That one
+call places the level-0 records the view needs (the records its visible surfaces
+need, and the deeper levels *those* need — nothing else), evaluates the levels
+bottom-up and answers every hit from the complete record sets, exactly as for sensor
+points.  So records made for a view serve an illuminance run of the same scene and
+settings, and the other way round.
+
+**Branching and the throughput floor.**  A split at glass doubles the rays of a path.
+Branches whose photometric throughput falls below ``WEIGHT_LIMIT`` (2e-3, the role of
+Radiance's ``-lw``) play Russian roulette: kept with probability w / ``WEIGHT_LIMIT`` and then
+weighted ``WEIGHT_LIMIT`` / w, so the estimate stays unbiased (Arvo & Kirk, "Particle
+transport and image synthesis", SIGGRAPH 1990) while the ray count stays bounded.
+
+**Settings for images.**
+
+* ``point_samples`` is ignored: it gives every query its own primary evaluation,
+  which for an image means ``point_samples`` rays for each pixel.  A cache made with
+  ``point_samples`` therefore has another fingerprint and cannot be shared with an
+  image (use the same options without it).
+* Record spacing.  Unless ``min_spacing``/``max_spacing`` are given, the integrator
+  derives both from the extent of its queries (D = the diagonal of their box; max =
+  D/2, min = max/16).  A view through a window sees ground tens of metres away, which
+  would make that box — and every record inside the room — as large as the site.  For
+  images D is therefore the diagonal of the box between the 5th and 95th percentiles
+  of the diffuse hits along each axis (:func:`view_spacing`), the same rule made robust
+  to the few far pixels.  The spacing is not part of the cache's fingerprint, so this
+  does not stop records from being shared.
+
+**Plastic** (Radiance's ``plastic``; :mod:`lbl_illum.scene.materials` gives the model).  A
+hit adds a diffuse hit of weight throughput · ρ_d/π — its diffuse part goes through the
+cache like any diffuse surface — *and* continues as a specular path
+(``_continue_specular``, :meth:`~lbl_illum.scene.materials.MaterialTable.reflect`).  On rough
+plastic the sun, a 6.8e-5 sr disk that a lobe sample would rarely meet, is taken
+directly instead: L += ρ_s f_s(v, s) cos θ_s E_dn T(s) for one direction s drawn
+uniformly in the disk, T the transmittance of a shadow ray toward it (what Radiance's
+``dirnorm`` adds for a light source; it widens α² by Ω/4π for flat surfaces in place of
+sampling the disk).  The ray continued from that plastic then does not count the sun
+disk if it escapes — straight on, or through glass, which the shadow ray also crosses —
+so the sun is counted once; after any further reflection it counts again, as no shadow
+ray covered that path.  Light surfaces met by the continued ray count (unbiased; Radiance
+takes them by shadow rays as well and discards them in its specular samples).
+
+Units: lengths [m], luminance [cd/m²], illuminance [lux]; pixels are linear RGB with
+photometric channels (DESIGN.md §2), row 0 the top of the image (:mod:`lbl_illum.scene.views`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .cache import IrradianceCache
+from ..errors import InputError, plural
+from .integrator import MAX_SPECULAR_DEPTH, Integrator
+from ..scene.materials import GLASS, LIGHT, MIRROR, PLASTIC, russian_roulette
+from .options import Options
+from ..photometry import luminance
+from ..cli.progress import ProgressBar as _Bar
+from ..scene.scenefile import Scene
+from ..scene.views import View, view_from_file, view_from_string, views_from_table
+
+__all__ = ["RenderResult", "RenderStats", "render", "render_command", "add_render_arguments",
+           "trace_view_paths", "image_options", "view_spacing", "resolve_view", "check_image_size",
+           "WEIGHT_LIMIT", "MAX_IMAGE_SIDE"]
+
+#: Photometric throughput below which a specular branch plays Russian roulette
+#: (the role of Radiance's ``-lw``).
+WEIGHT_LIMIT = 2e-3
+#: Percentiles of the diffuse hits' coordinates whose box sets an image's record spacing.
+SPACING_PERCENTILES = (5.0, 95.0)
+#: Random-stream tags (the integrator uses 1-4).
+_TAG_PIXELS, _TAG_PATHS = 11, 12
+
+
+# ---------------------------------------------------------------------------
+# Results
+# ---------------------------------------------------------------------------
+
+@dataclass
+class RenderStats:
+    """What a render did.
+
+    records, new_records, queries : per diffuse level, as :class:`~lbl_illum.engine.integrator.RunStats`
+    (``records`` after the render; ``new_records`` made for this image).
+    """
+
+    width: int = 0
+    height: int = 0
+    pixel_samples: int = 1
+    camera_rays: int = 0          # camera rays and their specular continuations
+    diffuse_hits: int = 0         # path ends on diffuse surfaces (cache queries at level 0)
+    rays: int = 0                 # every ray of the render: camera, records, shadow rays
+    records: list = field(default_factory=list)
+    new_records: list = field(default_factory=list)
+    queries: list = field(default_factory=list)
+    cache_hits: int = 0
+    min_spacing: float = 0.0      # [m]
+    max_spacing: float = 0.0      # [m]
+    trace_seconds: float = 0.0    # camera paths
+    shade_seconds: float = 0.0    # illuminance at the diffuse hits (records included)
+    seconds: float = 0.0
+
+    @property
+    def records_made(self) -> int:
+        """Records computed for this image, all levels."""
+        return int(sum(self.new_records))
+
+    def as_dict(self) -> dict:
+        doc = dataclasses.asdict(self)
+        doc["records_made"] = self.records_made
+        return doc
+
+
+@dataclass
+class RenderResult:
+    """A luminance image.
+
+    rgb : (h, w, 3) float32 — linear RGB with photometric channels [cd/m²]; row 0 on top
+    valid : (h, w) bool — pixels with at least one ray (False outside a fisheye's circle,
+        where ``rgb`` is 0)
+    view, stats, options : what was rendered, how, with what settings
+    cache : the irradiance cache after the render (pass it on to share its records)
+    """
+
+    rgb: np.ndarray
+    valid: np.ndarray
+    view: View
+    stats: RenderStats
+    options: Options
+    cache: IrradianceCache | None = None
+
+    @property
+    def luminance(self) -> np.ndarray:
+        """(h, w) float32 photometric luminance [cd/m²] (Rec. 709 weights, DESIGN.md §2)."""
+        return luminance(self.rgb).astype(np.float32)
+
+
+# ---------------------------------------------------------------------------
+# Settings
+# ---------------------------------------------------------------------------
+
+def image_options(options: Options) -> Options:
+    """The options an image uses: ``options`` without ``point_samples`` (see the module text)."""
+    return dataclasses.replace(options, point_samples=None) if options.point_samples is not None else options
+
+
+def view_spacing(points: np.ndarray) -> tuple[float, float] | None:
+    """(min, max) record spacing [m] for the diffuse hits ``points`` (n, 3) [m] of a view.
+
+    The integrator's rule (max = D/2, min = max/16) with D the diagonal of the box
+    between the ``SPACING_PERCENTILES`` (5th, 95th) of the points along each axis: the
+    surfaces most of the image shows, not the far ground a few pixels see through a
+    window.  None when the points span no box (then the integrator's default applies).
+    """
+    from .integrator import MAX_SPACING_FRACTION, SPACING_RATIO
+
+    points = np.asarray(points, np.float64).reshape(-1, 3)
+    if len(points) < 2:
+        return None
+    lo, hi = np.percentile(points, SPACING_PERCENTILES, axis=0)
+    D = float(np.linalg.norm(hi - lo))
+    if not D > 0.0:
+        return None
+    max_spacing = MAX_SPACING_FRACTION * D
+    return max_spacing / SPACING_RATIO, max_spacing
+
+
+# ---------------------------------------------------------------------------
+# Camera paths
+# ---------------------------------------------------------------------------
+
+def _scatter_add(out: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """out[index] += values for (m, 3) values, with repeated indices summed."""
+    if len(index) == 0:
+        return
+    for c in range(3):
+        out[:, c] += np.bincount(index, values[:, c], minlength=len(out))
+
+
+def _continue_specular(integ: Integrator, d, P, Ng, Ns, mat, through, rng, sun_done):
+    """Continuations of rays that hit a mirror, glass or plastic:
+    (rows, origins, directions, throughput, sun_done).
+
+    ``rows`` index the hits each continuation comes from (a glass hit gives two).
+    Mirror: reflection about the shading normal, × ρ.  Glass (thin panes, no
+    refraction, as the integrator's): reflection × ρ(θ) and straight transmission
+    × τ(θ) at the ray's angle of incidence θ (:meth:`MaterialTable.specular`: Fresnel
+    glazing, or constants).  Plastic: polished, reflection × ρ_s(θ); rough, a direction
+    drawn from its lobe × ρ_s × the sample's weight (:meth:`MaterialTable.reflect`).
+    Weak branches play Russian roulette (``WEIGHT_LIMIT``).  ``sun_done`` (k,) marks the
+    hits whose ray must not count the sun disk; a continuation inherits it through glass,
+    gets True from rough plastic (whose sun highlight :meth:`DirectLight.sun_highlight` took) and
+    False from any other reflection.
+    """
+    mats = integ.materials
+    kind = mats.kind[mat]
+    cos_i = np.einsum("ij,ij->i", d, Ns)
+    tau, rho = mats.specular(mat, cos_i)
+    reflects = np.flatnonzero(((kind == MIRROR) | (kind == GLASS) | (kind == PLASTIC)) & (rho.max(axis=1) > 0.0))
+    transmits = np.flatnonzero((kind == GLASS) & (tau.max(axis=1) > 0.0))
+    refl, rho_refl = mats.reflect(mat[reflects], d[reflects], Ns[reflects], rho[reflects], rng)
+    rows = np.concatenate([reflects, transmits])
+    directions = np.concatenate([refl, d[transmits]])
+    side = np.concatenate([Ng[reflects], -Ng[transmits]])
+    factor = np.concatenate([rho_refl, tau[transmits]])
+    done = np.concatenate([mats.glossy[mat[reflects]], sun_done[transmits]])
+    new_through = through[rows] * factor
+    keep, new_through = russian_roulette(new_through, rng, WEIGHT_LIMIT)
+    rows, directions, side, new_through, done = rows[keep], directions[keep], side[keep], new_through[keep], done[keep]
+    origins = integ.tracer.offset(P[rows], side)
+    return rows, origins, directions, new_through, done
+
+
+def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndarray, rng: np.random.Generator,
+                     tmax: np.ndarray | None = None, progress=None):
+    """Follow camera rays through mirrors, glass and the specular part of plastic to the
+    sky, an emitter or a diffuse surface (plastic's diffuse part among them).
+
+    Parameters
+    ----------
+    integ : the integrator whose tracer, materials, sky and sun are used
+    origins, directions : (n, 3) [m] and unit camera rays
+    rng : random numbers for Russian roulette of weak branches, the lobes of rough
+        plastic and their sun highlights
+    tmax : (n,) aft clipping distance [m] of each camera ray (``inf``: none); beyond
+        it the ray sees nothing (black), as Radiance's ``-va``
+
+    Returns
+    -------
+    radiance : (n, 3) [cd/m²] luminance already known: sky, ground glow, sun disk,
+        light surfaces and sun highlights on rough plastic seen along the paths, times
+        their throughput
+    hits : dict of arrays ``ray`` (m,) camera-ray index, ``P`` (m, 3) [m], ``N`` (m, 3)
+        unit normal facing the arriving ray, ``weight`` (m, 3) = throughput · ρ_d/π [1/sr]:
+        the diffuse hits, whose luminance is weight · E(P, N)
+    rays : rays traced
+    """
+    n = len(origins)
+    radiance = np.zeros((n, 3))
+    ray = np.arange(n)
+    o = np.asarray(origins, np.float64)
+    d = np.asarray(directions, np.float64)
+    through = np.ones((n, 3))
+    sky, sun = integ.sky, integ.sun
+    mats = integ.materials
+    material_of = integ.scene.triangles.material
+    diffuse = mats.diffuse_reflectance.max(axis=1) > 0.0      # diffuse surfaces and plastic
+    sun_done = np.zeros(n, bool)     # the ray must not count the sun disk (see the module text)
+    out = {"ray": [], "P": [], "N": [], "weight": []}
+    rays = 0
+    for depth in range(MAX_SPECULAR_DEPTH + 1):
+        if len(ray) == 0:
+            break
+        hits = integ.tracer.intersect(o, d)
+        rays += len(ray)
+        if progress is not None:
+            progress.update(len(ray))
+        reached = hits.hit
+        escaped = ~hits.hit
+        if depth == 0 and tmax is not None:
+            clip = np.asarray(tmax, np.float64)
+            reached = reached & (hits.t <= clip)
+            escaped = escaped & ~np.isfinite(clip)
+        # -- escaped: sky, ground glow, sun disk
+        esc = np.flatnonzero(escaped)
+        if len(esc):
+            L = sky.luminance(d[esc])
+            if sun is not None:
+                L[sun.within_disk(d[esc]) & ~sun_done[esc]] += sun.luminance
+            _scatter_add(radiance, ray[esc], through[esc] * L)
+        hit = np.flatnonzero(reached)
+        if len(hit) == 0:
+            break
+        P, Ng, Ns = integ.tracer.surface(o, d, hits, hit)
+        mat = material_of[hits.prim[hit]]
+        kind = mats.kind[mat]
+        # -- emitters, seen directly, through glass or in a mirror
+        lit = np.flatnonzero(kind == LIGHT)
+        if len(lit):
+            _scatter_add(radiance, ray[hit[lit]], through[hit[lit]] * mats.luminance[mat[lit]])
+        # -- diffuse surfaces (and plastic's diffuse part) end the path; their luminance
+        #    comes from the cache
+        dif = np.flatnonzero(diffuse[mat])
+        if len(dif):
+            out["ray"].append(ray[hit[dif]])
+            out["P"].append(P[dif])
+            out["N"].append(Ns[dif])
+            rho_d = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif]))
+            out["weight"].append(through[hit[dif]] * (rho_d / np.pi))
+        # -- the sun's highlight on rough plastic, by a shadow ray
+        if sun is not None:
+            gl = np.flatnonzero(mats.glossy[mat])
+            if len(gl):
+                _scatter_add(radiance, ray[hit[gl]], through[hit[gl]] * integ.direct.sun_highlight(
+                    d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng))
+        # -- mirrors, glass and plastic's specular part continue
+        spec = np.flatnonzero(mats.continues[mat])
+        if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
+            break
+        s_hit = hit[spec]
+        rows, o, d, through, sun_done = _continue_specular(integ, d[s_hit], P[spec], Ng[spec], Ns[spec], mat[spec],
+                                                           through[s_hit], rng, sun_done[s_hit])
+        ray = ray[s_hit][rows]
+    if out["ray"]:
+        hits_out = {k: np.concatenate(v) for k, v in out.items()}
+    else:
+        hits_out = {"ray": np.zeros(0, np.int64), "P": np.zeros((0, 3)), "N": np.zeros((0, 3)),
+                    "weight": np.zeros((0, 3))}
+    return radiance, hits_out, rays
+
+
+# ---------------------------------------------------------------------------
+# The image
+# ---------------------------------------------------------------------------
+
+def render(scene: Scene, view: View, width: int, height: int, options: Options | None = None,
+           pixel_samples: int = 1, cache: IrradianceCache | None = None, progress=None,
+           integrator: Integrator | None = None) -> RenderResult:
+    """Render the luminance image [cd/m²] of ``view``, ``width`` × ``height`` pixels.
+
+    Parameters
+    ----------
+    scene : the scene (lengths in metres)
+    view : the camera (:class:`~lbl_illum.scene.views.View`); ``width`` and ``height`` are used
+        as given (:meth:`View.resolution` gives rpict's square pixels)
+    options : quality options (default ``scene.options``); ``point_samples`` is ignored
+        (:func:`image_options`)
+    pixel_samples : jittered rays per pixel (stratified within the pixel, one random
+        shift per pixel: :meth:`View.pixel_coordinates`); the pixel is their mean
+    cache : records to start from and add to, made for the same scene and settings
+        (an illuminance run's ``integrator.cache``, or :meth:`IrradianceCache.load`)
+    progress : object with ``update(rays)`` and ``describe(text)`` (a tqdm adapter)
+    integrator : an :class:`~lbl_illum.engine.integrator.Integrator` to use instead of a new
+        one (its cache is used and grows); ``options`` and ``cache`` must then be None
+
+    Returns
+    -------
+    RenderResult with ``rgb`` (h, w, 3) float32 [cd/m²], ``valid`` (h, w), stats and the cache.
+    """
+    t0 = time.perf_counter()
+    for name, value in (("width", width), ("height", height), ("pixel_samples", pixel_samples)):
+        if isinstance(value, bool) or int(value) != value or value < 1:
+            raise InputError(f"{name} must be a positive whole number, got {value!r}")
+    width, height, pixel_samples = int(width), int(height), int(pixel_samples)
+    if integrator is not None:
+        if options is not None or cache is not None:
+            raise ValueError("give options and cache through the integrator, not beside it")
+        integ = integrator
+        if integ.options.point_samples is not None:
+            raise InputError("render: the integrator uses point_samples, which images do not "
+                             "(make it with image_options(options))")
+    else:
+        opts = image_options(options or scene.options)
+        integ = Integrator(scene, opts, cache, progress)
+    if progress is not None and integ.progress is None:
+        integ.progress = progress
+    opts = integ.options
+    stats = RenderStats(width=width, height=height, pixel_samples=pixel_samples)
+    rays_before = integ.tracer.rays_traced
+
+    # 1. camera rays and their specular chains, all pixels and samples at once
+    if progress is not None:
+        progress.describe(f"tracing {width} x {height} x {pixel_samples} camera rays")
+    rng_pixels = np.random.default_rng(np.random.SeedSequence([opts.seed, _TAG_PIXELS]))
+    origins, directions, valid = view.rays(width, height, rng_pixels, pixel_samples)
+    live = np.flatnonzero(valid)
+    tmax = view.aft_distances(directions[live]) if view.aft > 0 else None
+    rng_paths = np.random.default_rng(np.random.SeedSequence([opts.seed, _TAG_PATHS]))
+    known, hits, camera_rays = trace_view_paths(integ, origins[live], directions[live], rng_paths, tmax,
+                                                progress)
+    stats.camera_rays = camera_rays
+    stats.diffuse_hits = len(hits["ray"])
+    t1 = time.perf_counter()
+    stats.trace_seconds = t1 - t0
+
+    # 2. the full illuminance at every diffuse hit, in one call through the cache
+    radiance = known
+    if len(hits["ray"]):
+        saved = integ.options
+        if saved.min_spacing is None and saved.max_spacing is None:
+            spacing = view_spacing(hits["P"])
+            if spacing is not None:
+                scale = integ.scene.unit_scale
+                integ.options = dataclasses.replace(saved, min_spacing=spacing[0] / scale,
+                                                    max_spacing=spacing[1] / scale)
+        try:
+            result = integ.compute(hits["P"], hits["N"])
+        finally:
+            integ.options = saved
+        _scatter_add(radiance, hits["ray"], hits["weight"] * result.rgb)
+        rs = result.stats
+        stats.records, stats.new_records, stats.queries = list(rs.records), list(rs.new_records), list(rs.queries)
+        stats.cache_hits = rs.cache_hits
+        stats.min_spacing, stats.max_spacing = rs.min_spacing, rs.max_spacing
+    elif integ.cache is not None:
+        stats.records = integ.cache.record_counts
+        stats.new_records = [0] * len(stats.records)
+    stats.shade_seconds = time.perf_counter() - t1
+
+    # 3. pixel = mean of its valid samples
+    full = np.zeros((len(valid), 3))
+    full[live] = radiance
+    full = full.reshape(height, width, pixel_samples, 3)
+    count = valid.reshape(height, width, pixel_samples).sum(axis=2)
+    rgb = full.sum(axis=2) / np.maximum(count, 1)[..., None]
+    stats.rays = integ.tracer.rays_traced - rays_before
+    stats.seconds = time.perf_counter() - t0
+    if progress is not None:
+        progress.describe("done")
+    return RenderResult(rgb.astype(np.float32), count > 0, view, stats, opts, integ.cache)
+
+
+# ---------------------------------------------------------------------------
+# Views by name, string or file
+# ---------------------------------------------------------------------------
+
+def _looks_like_options(text: str) -> bool:
+    words = text.split()
+    return len(words) != 1 or words[0].startswith("-") or words[0].startswith("VIEW=")
+
+
+def scene_views(scene: Scene) -> dict[str, View]:
+    """The named views of a scene: ``scene.views`` when the loader keeps them, else the
+    ``[views.NAME]`` tables read from the scene file."""
+    views = getattr(scene, "views", None)
+    if views:
+        return dict(views)
+    if scene.path is None:
+        return {}
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python < 3.11
+        import tomli as tomllib
+    data = tomllib.loads(Path(scene.path).read_text(encoding="utf-8"))
+    return views_from_table(data.get("views"), Path(scene.path).name, scene.unit_scale)
+
+
+def resolve_view(scene: Scene, view: str | None = None, view_file: str | None = None) -> View:
+    """The view of a render command.
+
+    ``view`` is Radiance view options (``"-vtv -vp 2 5.7 1.5 -vd 0 -1 -0.1"``, lengths in
+    metres) or the name of a ``[views.NAME]`` table of the scene file; ``view_file`` a
+    ``.vf`` file or Radiance picture.  With both a file and options, the options
+    change the file's view (as ``rpict -vf file -vp ...``).
+    """
+    base = view_from_file(view_file) if view_file else None
+    if view is None:
+        if base is None:
+            raise InputError("render: give a view (--view OPTIONS or NAME, or --view-file FILE)")
+        return base
+    text = view.strip()
+    if _looks_like_options(text):
+        return view_from_string(text, "--view", base=base)
+    if base is not None:
+        raise InputError(f"--view {text}: a named view cannot be combined with --view-file")
+    views = scene_views(scene)
+    if text in views:
+        return views[text]
+    where = scene.path.name if scene.path is not None else "scene"
+    if not views:
+        raise InputError(f"--view {text}: {where} has no [views] tables (or give Radiance view options)")
+    near = difflib.get_close_matches(text, list(views), n=1)
+    hint = f" (did you mean '{near[0]}'?)" if near else f" (views: {', '.join(views)})"
+    raise InputError(f"--view {text}: no [views.{text}] in {where}{hint}")
+
+
+# ---------------------------------------------------------------------------
+# The command
+# ---------------------------------------------------------------------------
+
+def add_render_arguments(parser) -> None:
+    """Arguments of ``lbl-illum render`` other than the quality options (added by the CLI)."""
+    parser.add_argument("scene", help="scene file (.toml)")
+    v = parser.add_argument_group("view")
+    v.add_argument("--view", metavar="VIEW",
+                   help="Radiance view options in one argument (--view=\"-vtv -vp 2 5.7 1.5 -vd 0 -1 -0.1 -vh 80 "
+                        "-vv 60\", lengths in metres) or the NAME of a [views.NAME] table of the scene file")
+    v.add_argument("--view-file", metavar="VF", help="a .vf file as rvu writes it (or a Radiance picture); "
+                   "--view options, if given, change it")
+    v.add_argument("-x", type=int, default=512, metavar="W", help="largest width in pixels (default 512)")
+    v.add_argument("-y", type=int, default=512, metavar="H", help="largest height in pixels (default 512); "
+                   "as rpict, one of them shrinks so that pixels are square")
+    v.add_argument("--pixel-samples", type=int, default=1, metavar="N",
+                   help="jittered rays per pixel, averaged (default 1)")
+    o = parser.add_argument_group("output")
+    o.add_argument("-o", "--output", required=True, metavar="IMAGE",
+                   help="luminance image: .exr (float cd/m2), .hdr (Radiance RGBE with VIEW=), .tif")
+    o.add_argument("--preview", metavar="PNG", help="tone-mapped sRGB preview (Reinhard et al. 2002)")
+    o.add_argument("--falsecolor", metavar="PNG", help="false-colour luminance with a legend in cd/m2")
+    o.add_argument("--falsecolor-max", type=float, metavar="L", help="top of the false-colour scale [cd/m2] "
+                   "(default: a round number above the 99th percentile)")
+    o.add_argument("--falsecolor-scale", choices=("linear", "log"), default="linear",
+                   help="false-colour bands: equal steps (linear, default) or equal ratios (log)")
+    from ..cli.cache import add_cache_file_arguments
+
+    add_cache_file_arguments(o)
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+
+
+def _arg(args, name, default=None):
+    return getattr(args, name, default)
+
+
+def _options_from_args(scene: Scene, args) -> Options:
+    """The scene's [settings], then ``--preset``, then the options given (as the
+    illuminance command), without ``point_samples``."""
+    if _arg(args, "point_samples") is not None:
+        raise InputError("--point-samples does not apply to images (every pixel would get its own evaluation)")
+    options = scene.options.with_preset(args.preset) if _arg(args, "preset") else scene.options
+    options = options.replace(
+        accuracy=_arg(args, "accuracy"), bounces=_arg(args, "bounces"), samples=_arg(args, "samples"),
+        ambient=_arg(args, "ambient"), min_spacing=_arg(args, "min_spacing"), max_spacing=_arg(args, "max_spacing"),
+        seed=_arg(args, "seed"), interpolation=_arg(args, "interpolation"),
+        bounce_scaling=False if _arg(args, "no_bounce_scaling") else None)
+    return image_options(options)
+
+
+
+
+#: Largest -x or -y of ``render`` [pixels] (OpenEXR and TIFF take more, but the one batch of
+#: camera rays would not fit any machine's memory long before).
+MAX_IMAGE_SIDE = 16384
+#: Memory a camera ray (one pixel sample) takes through ``render``'s single batch [bytes]:
+#: measured 0.45 KiB on examples/office (1024 × 1024 pixels, one sample, through glass and
+#: onto diffuse walls: 470 MB above the 160 MB the process starts with); twice that for
+#: scenes whose glass splits more paths.
+BYTES_PER_CAMERA_RAY = 1024
+
+
+def _available_memory() -> int | None:
+    """Memory available to a new allocation [bytes] (Linux ``MemAvailable``, else the free
+    physical pages), or None when the system does not say."""
+    import os
+
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_image_size(args) -> None:
+    """Refuse an image that cannot be rendered before any work: -x, -y or --pixel-samples
+    below 1, a side above :data:`MAX_IMAGE_SIDE`, or more camera rays (x · y · pixel samples,
+    all traced in one batch) than the available memory holds at
+    :data:`BYTES_PER_CAMERA_RAY` each.  The count is an upper bound: the view's aspect may
+    reduce one side (rpict's square pixels), never enlarge it."""
+    sizes = {}
+    for name, flag in (("x", "-x"), ("y", "-y"), ("pixel_samples", "--pixel-samples")):
+        value = getattr(args, name, None)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise InputError(f"{flag} must be a positive whole number, got {value}")
+        if flag != "--pixel-samples" and value > MAX_IMAGE_SIDE:
+            raise InputError(f"{flag} {value} is more than the {MAX_IMAGE_SIDE} pixels allowed per side")
+        sizes[name] = value
+    rays = sizes.get("x", 512) * sizes.get("y", 512) * sizes.get("pixel_samples", 1)
+    need = rays * BYTES_PER_CAMERA_RAY
+    have = _available_memory()
+    if have is not None and need > have:
+        raise InputError(f"-x {sizes.get('x', 512)} -y {sizes.get('y', 512)} with "
+                         f"{plural(sizes.get('pixel_samples', 1), 'pixel sample')} is {rays:,} camera rays, traced in "
+                         f"one batch: about {need / 2 ** 30:.3g} GiB of memory, more than the {have / 2 ** 30:.3g} GiB "
+                         "available; render a smaller image")
+
+
+def _check_outputs(args) -> None:
+    """Refuse bad output paths and numbers before any work."""
+    from ..io.images import check_image_path
+
+    check_image_path(args.output)
+    for png in (_arg(args, "preview"), _arg(args, "falsecolor")):
+        if png:
+            check_image_path(png, (".png",))
+    for extra in (_arg(args, "cache"), _arg(args, "stats")):
+        if extra and not Path(extra).resolve().parent.is_dir():
+            raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
+    check_image_size(args)
+    top = _arg(args, "falsecolor_max")
+    if top is not None and not (math.isfinite(top) and top > 0):
+        raise InputError(f"--falsecolor-max must be a positive luminance [cd/m2], got {top:g}")
+
+
+def render_command(args, progress=None) -> int:
+    """``lbl-illum render``: render, write the image (and preview, false colour, cache,
+    stats), print a one-line summary; return the exit status (0).
+
+    ``args`` has the attributes :func:`add_render_arguments` and the illuminance
+    command's quality options define (missing quality options count as not given).
+    Bad input raises :class:`~lbl_illum.errors.InputError` before any file is written.
+    ``progress`` replaces the tqdm bar (tests).
+    """
+    t0 = time.perf_counter()
+    from ..io.images import write_image, write_preview
+    from ..scene.scenefile import load_scene
+
+    _check_outputs(args)
+    quiet = bool(_arg(args, "quiet", False))
+    scene = load_scene(args.scene)
+    view = resolve_view(scene, _arg(args, "view"), _arg(args, "view_file"))
+    width, height = view.resolution(_arg(args, "x", 512), _arg(args, "y", 512))
+    options = _options_from_args(scene, args)
+    if not quiet:
+        for warning in scene.warnings:
+            print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+    integ = Integrator(scene, options)
+    if not quiet:
+        for note in integ.portal_notes():
+            print(f"lbl-illum: note: {note}", file=sys.stderr)
+    bar = progress if progress is not None else _Bar(enabled=not quiet)
+    integ.progress = bar
+    try:
+        cache_file = _arg(args, "cache")
+        if cache_file:
+            try:
+                integ.attach_cache_file(cache_file, rebuild=bool(_arg(args, "rebuild_cache")))
+            except InputError as exc:
+                if "other settings" in str(exc):
+                    raise InputError(f"{exc}; images do not use point_samples, so a cache made with them "
+                                     "(e.g. --preset medium) is not shared") from None
+                raise
+        result = render(scene, view, width, height, pixel_samples=_arg(args, "pixel_samples", 1) or 1,
+                        progress=bar, integrator=integ)
+    finally:
+        if progress is None:
+            bar.close()
+    write_image(args.output, result.rgb, view=view)
+    if _arg(args, "preview"):
+        write_preview(args.preview, result.rgb)
+    if _arg(args, "falsecolor"):
+        from ..viz.falsecolor import write_falsecolor
+
+        write_falsecolor(args.falsecolor, result.rgb, maximum=_arg(args, "falsecolor_max"),
+                         scale=_arg(args, "falsecolor_scale", "linear") or "linear", valid=result.valid,
+                         title=f"{Path(args.scene).name}: luminance")
+    seconds = time.perf_counter() - t0
+    stats = result.stats
+    if _arg(args, "stats"):
+        import json
+
+        from ..io.files import atomic_write_text
+
+        doc = {"command": "render", "scene": str(args.scene), "output": str(args.output), "view": view.options(),
+               **stats.as_dict(), "total_seconds": seconds,
+               "luminance": _luminance_summary(result), "settings": {**options.as_dict(), "units": scene.units}}
+        atomic_write_text(args.stats, json.dumps(doc, indent=2) + "\n")
+    if not quiet:
+        lum = _luminance_summary(result)
+        print(f"lbl-illum: render {width} x {height} ({view.type_name}, {stats.pixel_samples} "
+              f"sample{'s' if stats.pixel_samples != 1 else ''}/pixel) in {seconds:.2f} s; records per level "
+              f"{stats.records} ({stats.records_made} new); {stats.rays:,} rays; luminance median "
+              f"{lum['median']:.4g}, max {lum['max']:.4g} cd/m2 -> {args.output}", file=sys.stderr)
+    return 0
+
+
+def _luminance_summary(result: RenderResult) -> dict[str, Any]:
+    lum = result.luminance[result.valid]
+    if lum.size == 0:
+        return {"median": 0.0, "mean": 0.0, "max": 0.0}
+    return {"median": float(np.median(lum)), "mean": float(lum.mean()), "max": float(lum.max())}

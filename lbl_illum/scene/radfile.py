@@ -1,0 +1,404 @@
+"""Radiance scene files (``.rad``, ``.mat``) as geometry and materials.
+
+A Radiance scene description is a list of primitives, each ``modifier type identifier``
+followed by three argument lists (strings, integers, reals), each given by its count
+(Radiance reference manual, "Scene Description"; ``src/common/readobj.c``); ``#`` starts
+a comment, and a line beginning with ``!`` is a command whose output Radiance reads.
+
+**Surfaces** (:func:`rad_surfaces`), one :class:`~lbl_illum.scene.geometry.MeshPart` per
+modifier, which the scene file maps to a material like an OBJ ``usemtl`` name:
+
+* ``polygon``: triangulated as drawn by the even–odd rule that Radiance's own ray test
+  uses (:mod:`lbl_illum.scene.polygons`), so keyhole polygons keep their holes;
+* ``sphere``/``bubble``, ``cylinder``/``tube``, ``cone``/``cup`` and ``ring``: tessellated
+  with :data:`SEGMENTS` sides around (a sphere: an icosphere of :data:`SPHERE_LEVEL`
+  subdivisions), radii scaled so that the triangles' area equals the true surface's
+  (tested to 10⁻⁶): a fixed sagitta of about 1 % of the radius, the exact area.  Radiance's
+  cylinders and cones have no end caps, and neither have these.
+
+**Modifiers** (:func:`material_tables`): ``plastic``, ``metal``, ``glass``, ``mirror``,
+``trans``, ``light`` and ``glow`` definitions become tables of the scene file's
+``[materials]`` form; patterns and textures that modify them are left out, and
+``alias`` names are followed.  Everything else is skipped, each kind counted in one
+warning; a ``!`` command line is refused (it needs Radiance to run it).  Lengths are in
+the file's unit, scaled to metres by the caller.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = ["RadPrimitive", "read_rad", "rad_surfaces", "modifier_definitions", "material_tables",
+           "read_rad_surfaces", "material_name", "SURFACE_TYPES", "SEGMENTS", "SPHERE_LEVEL"]
+
+#: Radiance's surface types read here (the rest are skipped with a warning).
+SURFACE_TYPES = ("polygon", "sphere", "bubble", "cylinder", "tube", "cone", "cup", "ring")
+#: Sides of the tessellated circles of cylinders, cones and rings: the chords then stay
+#: within 1 − cos(π/24) = 0.86 % of the radius of the true circle.
+SEGMENTS = 24
+#: Icosphere subdivisions of a Radiance sphere (320 triangles, chords within 1.4 % of r).
+SPHERE_LEVEL = 2
+#: Radiance's material types (modifiers of surfaces); ``MATERIAL_TYPES`` are converted.
+MATERIAL_TYPES = ("plastic", "metal", "glass", "mirror", "trans", "light", "glow")
+#: Radiance's luminous efficacy for its RGB radiance: luminance [cd/m²] = 179 × radiance.
+WHITE_EFFICACY = 179.0
+#: Types that modify others without being a material this reader converts.
+OTHER_MODIFIERS = frozenset((
+    "plastic2", "metal2", "trans2", "dielectric", "interface", "illum", "spotlight", "mist", "prism1",
+    "prism2", "plasfunc", "metfunc", "transfunc", "plasdata", "metdata", "transdata", "BRTDfunc", "BSDF",
+    "aBSDF", "antimatter", "ashik2", "WGMDfunc", "texfunc", "texdata", "colorfunc", "brightfunc", "colordata",
+    "brightdata", "colorpict", "colortext", "brighttext", "mixfunc", "mixdata", "mixpict", "mixtext",
+    "spectrum", "specfile", "specfunc", "specdata", "specpict",
+))
+#: Patterns and textures: a surface or material they modify takes its material from their
+#: own modifier (Radiance applies them on the way down the chain; they are left out here).
+PATTERN_TYPES = frozenset(("texfunc", "texdata", "colorfunc", "brightfunc", "colordata", "brightdata",
+                           "colorpict", "colortext", "brighttext", "specfunc", "specdata", "specpict"))
+#: Mixtures of two modifiers: the first one is taken.
+MIXTURE_TYPES = frozenset(("mixfunc", "mixdata", "mixpict", "mixtext"))
+_REAL_COUNTS = {"sphere": (4,), "bubble": (4,), "cylinder": (7,), "tube": (7,), "cone": (8,), "cup": (8,),
+                "ring": (8,)}
+
+
+@dataclass
+class RadPrimitive:
+    """One primitive: ``modifier type identifier`` and its arguments, with its line."""
+
+    modifier: str
+    kind: str
+    name: str
+    strings: list
+    reals: np.ndarray
+    line: int
+
+
+def read_rad(path: str | Path, where: str) -> list[RadPrimitive]:
+    """Every primitive of a Radiance scene file, in order.  A malformed primitive or a
+    ``!`` command is an :class:`InputError` naming the file and line."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{where}: is a folder, not a scene file ({path})")
+    if not path.is_file():
+        raise InputError(f"{where}: no such file ({path})")
+    try:
+        text = path.read_bytes().decode("utf-8", errors="replace")
+    except PermissionError:
+        raise InputError(f"{where}: cannot read the file (permission denied)") from None
+    words: list[str] = []
+    lines: list[int] = []
+    for number, line in enumerate(text.splitlines(), 1):
+        body = line.split("#", 1)[0]
+        if body.lstrip().startswith("!"):
+            raise InputError(f"{where}: line {number}: the command '{body.strip()[:60]}' needs Radiance to run "
+                             "it; expand the file first (xform FILE > flat.rad)")
+        parts = body.split()
+        words.extend(parts)
+        lines.extend([number] * len(parts))
+    out = []
+    i, n = 0, len(words)
+    while i < n:
+        start = lines[i]
+        if i + 3 > n:
+            raise InputError(f"{where}: line {start}: incomplete primitive at the end of the file")
+        modifier, kind, name = words[i:i + 3]
+        i += 3
+        if kind == "alias":                 # ``mod alias identifier reference``: no argument lists
+            if i >= n:
+                raise InputError(f"{where}: line {start}: alias '{name}': missing the modifier it refers to")
+            out.append(RadPrimitive(modifier, kind, name, [words[i]], np.zeros(0), start))
+            i += 1
+            continue
+        args = []
+        for what in ("string", "integer", "real"):
+            if i >= n:
+                raise InputError(f"{where}: line {start}: {kind} '{name}': missing its {what} argument count")
+            try:
+                count = int(words[i])
+            except ValueError:
+                raise InputError(f"{where}: line {lines[i]}: {kind} '{name}': the {what} argument count must be a "
+                                 f"whole number, got '{words[i]}'") from None
+            if count < 0 or i + 1 + count > n:
+                raise InputError(f"{where}: line {lines[i]}: {kind} '{name}': {count} {what} arguments announced, "
+                                 f"{max(0, n - i - 1)} left in the file")
+            args.append(words[i + 1:i + 1 + count])
+            i += 1 + count
+        try:
+            reals = np.array(args[2], np.float64)
+        except ValueError:
+            raise InputError(f"{where}: line {start}: {kind} '{name}': a real argument is not a number") from None
+        out.append(RadPrimitive(modifier, kind, name, args[0], reals, start))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Surfaces
+# ---------------------------------------------------------------------------
+
+def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warnings: list[str] | None = None):
+    """The surfaces of ``prims`` as :class:`~lbl_illum.scene.geometry.MeshPart` s, one per
+    modifier in order of appearance, in metres (``scale`` metres per file unit).
+
+    Surface types other than :data:`SURFACE_TYPES` are counted in one warning appended to
+    ``warnings``; so are polygons whose triangles' area differs from the polygon's.
+    """
+    from .geometry import MeshPart
+    from .polygons import area_warnings, triangulate_faces
+
+    coords, lines, names, owners = [], [], [], []
+    quadric_tris: list[tuple[str, np.ndarray]] = []
+    skipped: dict[str, int] = {}
+    order: dict[str, None] = {}
+    for p in prims:
+        if p.kind == "polygon":
+            if len(p.reals) < 9 or len(p.reals) % 3:
+                raise InputError(f"{where}: line {p.line}: polygon '{p.name}': needs 3 reals per vertex and at "
+                                 f"least 3 vertices, got {len(p.reals)} reals")
+            coords.append(p.reals.reshape(-1, 3))
+            lines.append(p.line)
+            names.append(p.name)
+            owners.append(p.modifier)
+            order.setdefault(p.modifier)
+        elif p.kind in _REAL_COUNTS:
+            if len(p.reals) not in _REAL_COUNTS[p.kind]:
+                raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': needs {_REAL_COUNTS[p.kind][0]} "
+                                 f"reals, got {len(p.reals)}")
+            tri = _quadric(p, where)
+            if len(tri):
+                quadric_tris.append((p.modifier, tri))
+                order.setdefault(p.modifier)
+        elif p.kind not in MATERIAL_TYPES and p.kind not in OTHER_MODIFIERS and p.kind != "alias":
+            skipped[p.kind] = skipped.get(p.kind, 0) + 1
+    if warnings is not None and skipped:
+        what = ", ".join(f"{count} '{kind}'" for kind, count in skipped.items())
+        warnings.append(f"{where}: skipped {what} {'primitive' if sum(skipped.values()) == 1 else 'primitives'} "
+                        f"(read: {', '.join(SURFACE_TYPES)})")
+    per_modifier: dict[str, list[np.ndarray]] = {m: [] for m in order}
+    if coords:
+        sizes = np.array([len(v) for v in coords])
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        vertices = np.concatenate(coords)
+        result = triangulate_faces(vertices, [np.arange(offsets[k], offsets[k + 1]) for k in range(len(coords))])
+        if warnings is not None:
+            warnings += area_warnings(result, where, lambda f: f"line {lines[f]} (polygon {names[f]})", scale * scale)
+        owner = np.array(owners, object)[result.face]
+        for modifier in order:
+            sel = result.triangles[owner == modifier]
+            if len(sel):
+                per_modifier[modifier].append(vertices[sel])
+    for modifier, tri in quadric_tris:
+        per_modifier[modifier].append(tri)
+    return [MeshPart(m, m, None, m, np.concatenate(parts) * scale) for m, parts in per_modifier.items() if parts]
+
+
+def _circle(n: int) -> np.ndarray:
+    """(n, 2) unit circle points, counter-clockwise from angle 0."""
+    a = 2.0 * np.pi * np.arange(n) / n
+    return np.stack([np.cos(a), np.sin(a)], axis=1)
+
+
+def _frame(axis: np.ndarray):
+    """Two unit vectors completing ``axis`` (unit) to a right-handed frame."""
+    from ..engine.hemisphere import orthonormal_basis
+
+    t, b = orthonormal_basis(axis[None])
+    return t[0], b[0]
+
+
+def _quadric(p: RadPrimitive, where: str) -> np.ndarray:
+    """(m, 3, 3) triangles of a sphere, cylinder, cone or ring primitive (module text);
+    empty for a degenerate one (zero radius or length)."""
+    r = p.reals
+    if p.kind in ("sphere", "bubble"):
+        centre, radius = r[:3], abs(r[3])
+        if radius == 0.0:
+            return np.zeros((0, 3, 3))
+        tri = _unit_sphere() * radius + centre
+        return tri[:, [0, 2, 1]] if p.kind == "bubble" else tri
+    if p.kind == "ring":
+        centre, normal = r[:3], r[3:6]
+        r0, r1 = sorted((r[6], r[7]))            # Radiance takes the radii in either order
+        length = np.linalg.norm(normal)
+        if length == 0.0 or r0 < 0 or r1 == r0:
+            raise InputError(f"{where}: line {p.line}: ring '{p.name}': needs a normal and two different, "
+                             "non-negative radii")
+        axis = normal / length
+        t, b = _frame(axis)
+        c = _circle(SEGMENTS)
+        k = np.sqrt(np.pi / (0.5 * SEGMENTS * np.sin(2.0 * np.pi / SEGMENTS)))      # n-gon area = disk area
+        ring = c[:, :1] * t + c[:, 1:] * b
+        outer = centre + k * r1 * ring
+        j = np.roll(np.arange(SEGMENTS), -1)
+        if r0 == 0.0:
+            return np.stack([np.broadcast_to(centre, outer.shape), outer, outer[j]], axis=1)
+        inner = centre + k * r0 * ring
+        return np.concatenate([np.stack([inner, outer, outer[j]], 1), np.stack([inner, outer[j], inner[j]], 1)])
+    # cylinder, tube, cone, cup: the lateral surface between two circles
+    p0, p1 = r[:3], r[3:6]
+    r0, r1 = (r[6], r[6]) if p.kind in ("cylinder", "tube") else (r[6], r[7])
+    axis = p1 - p0
+    length = np.linalg.norm(axis)
+    if length == 0.0 or (r0 == 0.0 and r1 == 0.0):
+        return np.zeros((0, 3, 3))
+    if r0 < 0 or r1 < 0:
+        raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': radii must not be negative")
+    t, b = _frame(axis / length)
+    c = _circle(SEGMENTS)
+    ring = c[:, :1] * t + c[:, 1:] * b
+    j = np.roll(np.arange(SEGMENTS), -1)
+    exact = np.pi * (r0 + r1) * np.hypot(length, r1 - r0)
+
+    def lateral(k):
+        a, b_ = p0 + k * r0 * ring, p1 + k * r1 * ring
+        tri = np.concatenate([np.stack([a, a[j], b_[j]], 1), np.stack([a, b_[j], b_], 1)])
+        return tri[np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1) > 0]
+
+    k = np.pi / (SEGMENTS * np.sin(np.pi / SEGMENTS))           # perimeter of the n-gon = the circle's
+    for _ in range(4):                                           # then the area exactly (secant on k)
+        area = _area(lateral(k))
+        k2 = k * 1.001
+        slope = (_area(lateral(k2)) - area) / (k2 - k)
+        if slope <= 0:
+            break
+        k += (exact - area) / slope
+    tri = lateral(k)
+    return tri[:, [0, 2, 1]] if p.kind in ("tube", "cup") else tri
+
+
+def _area(tri: np.ndarray) -> float:
+    return float(0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+
+
+_SPHERE = None
+
+
+def _unit_sphere() -> np.ndarray:
+    """(320, 3, 3) icosphere of :data:`SPHERE_LEVEL` subdivisions scaled to the unit sphere's
+    area (4π), outward winding."""
+    global _SPHERE
+    if _SPHERE is None:
+        import trimesh
+
+        mesh = trimesh.creation.icosphere(subdivisions=SPHERE_LEVEL, radius=1.0)
+        tri = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.faces)]
+        tri *= np.sqrt(4.0 * np.pi / _area(tri))
+        tri.setflags(write=False)
+        _SPHERE = tri
+    return _SPHERE
+
+
+# ---------------------------------------------------------------------------
+# Modifiers as materials
+# ---------------------------------------------------------------------------
+
+def modifier_definitions(prims: list[RadPrimitive]) -> dict[str, RadPrimitive]:
+    """The modifiers ``prims`` define, by name; a later definition replaces an earlier
+    one, as in Radiance."""
+    return {p.name: p for p in prims if p.kind in MATERIAL_TYPES or p.kind in OTHER_MODIFIERS or p.kind == "alias"}
+
+
+def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, warnings: list[str] | None = None
+                    ) -> dict[str, dict]:
+    """Tables in the form of the scene file's ``[materials.NAME]`` for the modifiers
+    ``names``, from ``definitions`` (name → (primitive, where it was read)).
+
+    ``plastic`` (C, s, α): diffuse C when s = 0, else our plastic; ``metal``: our plastic
+    with the same arguments (its specular part white instead of coloured by C: the
+    difference is counted in a warning); ``glass`` (t_n per channel, n): Fresnel glass of
+    the same normal transmittance; ``mirror``: mirror; ``trans``: diffuse with the
+    reflected part (1 − s)(1 − t_d) C (no transmission yet: warned); ``light``, ``glow``:
+    light surfaces of luminance 179 × radiance.  A pattern that modifies a material is
+    left out (warned).  ``alias`` is followed.  A modifier that is not defined, or whose
+    type is not converted, is an :class:`InputError` naming it.
+    """
+    from .materials import glazing_optics
+
+    out: dict[str, dict] = {}
+    notes: dict[str, int] = {}
+    for name in names:
+        seen = set()
+        prim, where = _resolve(name, definitions, seen, notes)
+        a = prim.reals
+        label = f"{where}: line {prim.line}: {prim.kind} '{prim.name}'"
+        need = {"plastic": 5, "metal": 5, "glass": 3, "mirror": 3, "trans": 7, "light": 3, "glow": 4}[prim.kind]
+        if len(a) < need or (prim.kind == "glass" and len(a) not in (3, 4)):
+            raise InputError(f"{label}: needs {need} reals, got {len(a)}")
+        if prim.modifier != "void":
+            _resolve_patterns(prim.modifier, definitions, notes)
+        rgb = [float(v) for v in a[:3]]
+        if prim.kind in ("plastic", "metal"):
+            s, alpha = float(a[3]), float(a[4])
+            if prim.kind == "metal":
+                notes["metal read as plastic (white specular)"] = notes.get("metal read as plastic (white specular)", 0) + 1
+            out[name] = ({"type": "diffuse", "reflectance": rgb} if s == 0.0 and prim.kind == "plastic" else
+                         {"type": "plastic", "reflectance": rgb, "specularity": s, "roughness": alpha})
+        elif prim.kind == "glass":
+            index = float(a[3]) if len(a) == 4 else 1.52
+            tau, _ = glazing_optics(np.ones(1), np.clip(np.array(rgb), 0.0, 1.0), index)
+            out[name] = {"type": "glass", "transmittance": [float(t) for t in tau[0]], "refractive_index": index}
+        elif prim.kind == "mirror":
+            out[name] = {"type": "mirror", "reflectance": rgb}
+        elif prim.kind == "trans":
+            s, td = float(a[3]), float(a[5])
+            notes["trans read as diffuse (no transmission)"] = notes.get("trans read as diffuse (no transmission)", 0) + 1
+            out[name] = {"type": "diffuse", "reflectance": [c * (1.0 - s) * (1.0 - td) for c in rgb]}
+        else:                       # light, glow
+            out[name] = {"type": "light", "luminance": [WHITE_EFFICACY * c for c in rgb]}
+    if warnings is not None and notes:
+        warnings.append("Radiance modifiers: " + "; ".join(f"{count} {what}" for what, count in notes.items()))
+    return out
+
+
+def _resolve(name: str, definitions, seen: set, notes: dict):
+    """(primitive, where) of the material of modifier ``name``, following ``alias``, the
+    modifiers of patterns and textures, and the first modifier of mixtures (each such
+    step counted in ``notes``)."""
+    if name in seen:
+        raise InputError(f"modifier '{name}': its chain of modifiers forms a loop")
+    seen.add(name)
+    if name not in definitions:
+        raise InputError(f"modifier '{name}' is not defined in the Radiance files of the scene (add the .mat or "
+                         ".rad file that defines it as a [[geometry]] entry, or map it in 'materials')")
+    prim, where = definitions[name]
+    if prim.kind == "alias":
+        return _resolve(prim.strings[0], definitions, seen, notes)
+    if prim.kind in PATTERN_TYPES:
+        notes["patterns and textures left out"] = notes.get("patterns and textures left out", 0) + 1
+        return _resolve(prim.modifier, definitions, seen, notes)
+    if prim.kind in MIXTURE_TYPES and prim.strings:
+        notes["mixtures read as their first modifier"] = notes.get("mixtures read as their first modifier", 0) + 1
+        return _resolve(prim.strings[0], definitions, seen, notes)
+    if prim.kind not in MATERIAL_TYPES:
+        raise InputError(f"{where}: line {prim.line}: modifier '{name}' is a '{prim.kind}', which is not read "
+                         f"(read: {', '.join(MATERIAL_TYPES)}); map it to a material in 'materials'")
+    return prim, where
+
+
+def material_name(name: str, definitions) -> str:
+    """The name of the material that modifier ``name`` ends at: ``name`` itself for a
+    material (or an undefined name), else the material its aliases, patterns and
+    mixtures lead to (:func:`_resolve`)."""
+    try:
+        return _resolve(name, definitions, set(), {})[0].name
+    except InputError:
+        return name
+
+
+def _resolve_patterns(name: str, definitions, notes: dict) -> None:
+    """Count the patterns and textures that modify a material (left out)."""
+    seen = set()
+    while name != "void" and name in definitions and name not in seen:
+        seen.add(name)
+        prim = definitions[name][0]
+        if prim.kind in PATTERN_TYPES or prim.kind in MIXTURE_TYPES:
+            notes["patterns and textures left out"] = notes.get("patterns and textures left out", 0) + 1
+        name = prim.modifier if prim.kind != "alias" else prim.strings[0]
+
+
+def read_rad_surfaces(path: str | Path, where: str, scale: float = 1.0, warnings: list[str] | None = None):
+    """:func:`rad_surfaces` of the Radiance file ``path``."""
+    return rad_surfaces(read_rad(path, where), where, scale, warnings)

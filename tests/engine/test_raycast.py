@@ -1,0 +1,133 @@
+"""Ray casting: no self-hits off surfaces at any scale or angle; glass along shadow rays."""
+
+import numpy as np
+import pytest
+
+from lbl_illum.scene.geometry import Triangles, box_triangles
+from lbl_illum.engine.hemisphere import stratified_directions
+from lbl_illum.scene.materials import DIFFUSE, GLASS
+from lbl_illum.engine.raycast import Tracer
+
+KINDS = np.array([DIFFUSE, GLASS], np.int8)
+TAU = np.array([[0, 0, 0], [0.7, 0.7, 0.7]], float)
+
+
+def tilted_plane(center, size, normal):
+    normal = np.asarray(normal, float) / np.linalg.norm(normal)
+    u = np.cross(normal, [0.3, 0.5, 0.8])
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    c = np.asarray(center, float)
+    corners = [c + size * (-u - v), c + size * (u - v), c + size * (u + v), c + size * (-u + v)]
+    verts = np.array([[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]])
+    return Triangles(verts, np.zeros(2, np.int32), np.full(2, -1, np.int32)), normal, u, v
+
+
+@pytest.mark.parametrize("scale", [1e-4, 1.0, 1e4])
+def test_rays_leaving_a_surface_never_hit_it_again(scale):
+    tri, n, u, v = tilted_plane(np.array([3.0, -7.0, 11.0]) * scale, 5 * scale, [0.2, 0.3, 0.9])
+    tracer = Tracer(tri, KINDS, TAU)
+    rng = np.random.default_rng(0)
+    s, t = rng.uniform(-4, 4, (2, 2000)) * scale
+    points = tri.vertices[0, 0] * 0 + np.array([3.0, -7.0, 11.0]) * scale + s[:, None] * u + t[:, None] * v
+    # hit the plane from above with random rays, then leave it from the hit points
+    origins = points + n * scale
+    hits = tracer.intersect(origins, np.tile(-n, (2000, 1)))
+    assert hits.hit.all()
+    P, Ng, Ns = tracer.surface(origins, np.tile(-n, (2000, 1)), hits)
+    assert np.abs((P - points) @ n).max() < 1e-9 * scale
+    d = stratified_directions(Ns, 4, 12, rng).reshape(-1, 3)       # includes near-grazing rays
+    o = np.repeat(tracer.offset(P, Ng), 48, axis=0)
+    assert not tracer.intersect(o, d).hit.any()
+
+
+def test_shadow_ray_through_glass_and_blocked_by_opaque():
+    glass = np.array([[[-1, -1, 1], [1, -1, 1], [1, 1, 1]], [[-1, -1, 1], [1, 1, 1], [-1, 1, 1]]], float)
+    wall = glass + [0, 0, 2.0]
+    tri = Triangles(np.concatenate([glass, glass + [0, 0, 0.5], wall]), np.array([1, 1, 1, 1, 0, 0], np.int32),
+                    np.full(6, -1, np.int32))
+    tracer = Tracer(tri, KINDS, TAU)
+    o = np.zeros((2, 3))
+    d = np.array([[0, 0, 1.0], [0, 0, 1.0]])
+    T = tracer.transmittance(o, d, np.array([2.0, 10.0]))
+    assert np.allclose(T[0], 0.49)          # two panes before the wall at z = 3
+    assert np.allclose(T[1], 0.0)           # the wall blocks the longer segment
+
+
+def _rotation(seed):
+    q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    return q * np.sign(np.linalg.det(q))
+
+
+def test_sensor_facing_a_surface_closer_than_the_offset_starts_its_rays_in_front_of_it():
+    """A 200 m wall makes ε ≈ 3 mm: the plain offset of a sensor 1 mm in front of it,
+    facing it, lands behind the wall; the sensor's origin must stay in front."""
+    wall = np.array([[[-100, 0, 0], [100, 0, 0], [100, 0, 100]], [[-100, 0, 0], [100, 0, 100], [-100, 0, 100]]], float)
+    tracer = Tracer(Triangles(wall, np.zeros(2, np.int32), np.full(2, -1, np.int32)), KINDS, TAU)
+    P = np.array([[0.0, -1e-3, 50.0], [30.0, -5e-4, 20.0]])
+    N = np.tile([0.0, 1.0, 0.0], (2, 1))
+    assert np.all(tracer.offset(P, N)[:, 1] > 0.0)            # the plain offset crosses the wall
+    o = tracer.sensor_origins(P, N)
+    assert np.all(o[:, 1] < 0.0) and np.all(o[:, 1] > P[:, 1])
+    d = stratified_directions(N, 8, 25, np.random.default_rng(1)).reshape(-1, 3)
+    assert tracer.intersect(np.repeat(o, 200, axis=0), d).hit.all()   # the wall fills the view
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_sensors_in_corners_and_on_edges_of_a_closed_box_start_inside_it(seed):
+    """Origins on an edge lie in the plane of the adjacent face, where rays slipped
+    through the edge; from sensor_origins no ray leaves the box (rotated at random so
+    that nothing is axis-aligned)."""
+    rot = _rotation(seed)
+    box = box_triangles([2.0, 3.0, 1.5], [4.0, 6.0, 3.0]) @ rot.T
+    tracer = Tracer(Triangles(box, np.zeros(12, np.int32), np.full(12, -1, np.int32)), KINDS, TAU)
+    P = np.array([[0, 0, 0], [0, 0, 0], [0, 0, 0], [4, 6, 3], [2, 0, 0], [0, 3, 3], [4, 0, 1.5], [2, 3, 0]], float)
+    N = np.array([[0, 0, 1], [1, 0, 0], [1, 1, 1], [0, 0, -1], [0, 0, 1], [1, 0, 0], [-1, 0, 0], [0, 0, 1]], float)
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    P, N = P @ rot.T, N @ rot.T
+    o = tracer.sensor_origins(P, N)
+    d = stratified_directions(N, 16, 50, np.random.default_rng(seed)).reshape(-1, 3)
+    assert tracer.intersect(np.repeat(o, 800, axis=0), d).hit.all()
+    assert np.all(np.linalg.norm(o - P, axis=1) < 1e-3)
+    # a sensor in the middle of the floor keeps the plain offset
+    assert np.array_equal(o[-1], tracer.offset(P[-1:], N[-1:])[0])
+    # every corner and edge, facing into the room in random directions
+    C = np.array([[x, y, z] for x in (0, 4) for y in (0, 6) for z in (0, 3)]
+                 + [[2, 0, 0], [0, 3, 0], [4, 6, 1.5], [0, 0, 1.5], [2, 6, 3], [4, 3, 3]], float)
+    inward = np.where(C == 0, 1.0, np.where(C == [4, 6, 3], -1.0, 0.0))     # towards the faces it lies on
+    raw = np.random.default_rng(seed).normal(size=C.shape)
+    N = np.where(inward != 0, inward * (0.05 + np.abs(raw)), raw)
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    o = tracer.sensor_origins(C @ rot.T, N @ rot.T)
+    d = stratified_directions(N @ rot.T, 8, 25, np.random.default_rng(seed)).reshape(-1, 3)
+    assert tracer.intersect(np.repeat(o, 200, axis=0), d).hit.all()
+
+
+def test_rays_leaving_the_inside_of_a_sphere_reach_its_far_side():
+    """Hits on a sphere primitive are moved onto the true sphere, up to 7.2e-5·r outside
+    its facets.  Leaving towards the inside, the origin must clear the facets: before the
+    fix ~97 % of the rays and shadow rays from the inner wall of a closed sphere hit the
+    facet they left (an integrating sphere lost 97 % of its direct light)."""
+    from lbl_illum.scene.geometry import sphere_triangles
+
+    radius = 2.0
+    center = np.array([0.3, -0.2, 1.0])
+    verts = sphere_triangles(center, radius)
+    tri = Triangles(verts, np.zeros(len(verts), np.int32), np.zeros(len(verts), np.int32),
+                    center[None, :], np.array([radius]))
+    tracer = Tracer(tri, KINDS, TAU)
+    rng = np.random.default_rng(5)
+    u = rng.normal(size=(300, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    points, inward = center + radius * u, -u
+    o = tracer.offset(points, inward)
+    # shadow rays to the centre pass; hemisphere rays cross the sphere (chord ≥ 2r·cos θ)
+    assert tracer.transmittance(o, inward, np.full(300, radius)).min() == 1.0
+    d = stratified_directions(inward, 4, 12, rng).reshape(-1, 3)
+    hits = tracer.intersect(np.repeat(o, 48, axis=0), d)
+    assert hits.hit.all()
+    cos = np.einsum("ij,ij->i", d, np.repeat(inward, 48, axis=0))
+    assert np.all(hits.t > 0.99 * 2 * radius * cos - 1e-3)
+    # leaving outwards keeps the plain offset
+    eps = 1e-5 * (np.abs(points).max(axis=1) + tracer.length_scale)
+    assert np.allclose(np.linalg.norm(tracer.offset(points, u) - points, axis=1), eps)

@@ -1,0 +1,532 @@
+"""Luminance images: analytic pixel values, the cache shared with illuminance runs, the command.
+
+Reference values and tolerances.
+* A diffuse plane under a uniform sky and a sun, open to the whole upper hemisphere:
+  E = E_h + E_dn sin(altitude) exactly, so L = ρ E/π.  The stratified estimate of a
+  uniform sky is exact (π/S Σ L_sky = E_h) and the gradients of a constant are 0, so
+  the only error is float32 storage: rtol 1e-5.
+* Sky, sun disk, light surfaces seen directly, in a mirror (× ρ) or through a pane
+  (× τ, + ρ × the reflected sky): exact, rtol 1e-6.
+* Plastic (Radiance's ``plastic``): a camera ray meeting a plastic floor under a uniform
+  sky carries ρ_d(θ) E/π + ρ_s(θ) L (polished: exact per ray, rtol 1e-6 along given rays,
+  5e-3 over a 0.5° image whose θ varies by ±0.25°) or ρ_d E/π + s A(θ) L on average
+  (rough: A the lobe's albedo by quadrature, test_materials.lobe_albedo; 4 standard errors).
+  The sun's highlight on rough plastic is ρ_s f_s(v, s) cos θ_s E_dn on every ray, within
+  0.5 % (the lobe's change across the 0.27° disk), and the sun disk is not counted again
+  by the sampled reflections (one in ~1200 of them meets it, and would add ~10³ times the
+  highlight).
+* An integrating sphere (Modest, *Radiative Heat Transfer*, 2013, ch. 4; see
+  validation/studies/integrating_sphere.py): wall luminance ρ/π · E_0 (1 − q^{N+1})/(1 − q)
+  with E_0 = π L (r/R)², q = ρ (1 − (r/R)²).  The image mean over the wall pixels is
+  within 4 % (direct step noise over ~1000 pixels ≈ 0.6 %, cache bias at a = 0.2 ≈ 2 %).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+import pytest
+
+from lbl_illum import Options
+from lbl_illum.errors import InputError
+from lbl_illum.engine.integrator import Integrator
+from lbl_illum.scene.materials import plastic_fresnel, thin_pane_reflectance, ward_brdf
+from lbl_illum.engine.render import (WEIGHT_LIMIT, image_options, render, render_command, resolve_view,
+                              trace_view_paths, view_spacing)
+from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
+from lbl_illum.scene.views import View, view_from_string
+
+from conftest import make_scene
+
+E_H = 10000.0          # sky's horizontal illuminance [lux]
+E_DN = 50000.0         # sun's direct normal illuminance [lux]
+SUN_ALT, SUN_AZ = 40.0, 180.0
+QUICK = Options(accuracy=0.2, samples=64, bounces=2)
+
+PLANE = {"shape": "polygon", "material": "plane",
+         "vertices": [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]]}
+
+
+def uniform_sky(E=E_H):
+    return {"type": "uniform", "horizontal_illuminance": E, "ground_reflectance": 0.2}
+
+
+def overcast_sky(E=E_H):
+    return {"type": "cie-overcast", "horizontal_illuminance": E, "ground_reflectance": 0.2}
+
+
+def sun():
+    return {"altitude": SUN_ALT, "azimuth": SUN_AZ, "direct_normal_illuminance": E_DN}
+
+
+def plane_scene(kind="diffuse", reflectance=0.5, sky=None, with_sun=True):
+    mats = {"plane": {"type": kind, "reflectance": reflectance}}
+    return make_scene([PLANE], mats, sky or uniform_sky(), sun() if with_sun else None)
+
+
+def pane_scene(reflectance=None, tau=0.6, sky=None, model="constant"):
+    """A 40 m × 40 m vertical pane in the plane y = 2, nothing else.  ``model`` "constant"
+    (τ, ρ at every angle; ρ by default the thin pane's at normal incidence) or "fresnel"."""
+    glass = {"type": "glass", "transmittance": tau, "model": model}
+    if reflectance is not None:
+        glass["reflectance"] = reflectance
+    geo = [{"shape": "rectangle", "origin": [-20, 2, -20], "u": [40, 0, 0], "v": [0, 0, 40], "material": "glass"}]
+    return make_scene(geo, {"glass": glass}, sky or uniform_sky())
+
+
+def sun_direction():
+    alt, az = np.radians(SUN_ALT), np.radians(SUN_AZ)
+    return np.array([np.cos(alt) * np.sin(az), np.cos(alt) * np.cos(az), np.sin(alt)])
+
+
+# -- analytic pixels ---------------------------------------------------------------------
+
+def test_diffuse_plane_under_sky_and_sun_is_rho_E_over_pi():
+    scene = plane_scene(reflectance=0.5)
+    view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 -0.6 -vh 60 -vv 40")
+    result = render(scene, view, 24, 16, QUICK, pixel_samples=2)
+    E = E_H + E_DN * math.sin(math.radians(SUN_ALT))
+    assert result.rgb.shape == (16, 24, 3) and result.rgb.dtype == np.float32
+    assert result.valid.all()
+    np.testing.assert_allclose(result.rgb, 0.5 * E / np.pi, rtol=1e-5)
+    np.testing.assert_allclose(result.luminance, 0.5 * E / np.pi, rtol=1e-5)
+    # every diffuse hit was a cache query; the plane needs no deeper level (its rays escape)
+    s = result.stats
+    assert s.diffuse_hits == 24 * 16 * 2 and s.queries[0] == s.diffuse_hits
+    assert s.records[0] == s.new_records[0] > 0 and s.records[1] == 0
+    assert s.rays >= s.camera_rays == 24 * 16 * 2
+
+
+def test_sky_seen_directly_and_sun_disk_luminance():
+    scene = plane_scene()
+    up = render(scene, view_from_string("-vtv -vp 0 0 1.5 -vd 0 0 1 -vu 0 1 0 -vh 60 -vv 60"), 8, 8, QUICK)
+    np.testing.assert_allclose(up.rgb, E_H / np.pi, rtol=1e-6)
+    assert up.stats.diffuse_hits == 0 and up.stats.new_records in ([], [0, 0, 0])
+    # a 0.2° view centred on the sun lies inside its 0.53° disk: sky + E_dn/Ω everywhere
+    s = sun_direction()
+    at_sun = View("v", (0, 0, 1.5), tuple(s), (0, 0, 1), 0.2, 0.2)
+    result = render(scene, at_sun, 6, 6, QUICK, pixel_samples=3)
+    np.testing.assert_allclose(result.rgb, E_H / np.pi + E_DN / SUN_SOLID_ANGLE, rtol=1e-6)
+
+
+@pytest.mark.parametrize("rho", [1.0, 0.8])
+def test_mirror_shows_the_sky_times_its_reflectance(rho):
+    scene = plane_scene("mirror", rho, with_sun=False)
+    view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 -0.8 -vh 40 -vv 30")
+    result = render(scene, view, 16, 12, QUICK)
+    np.testing.assert_allclose(result.rgb, rho * E_H / np.pi, rtol=1e-6)
+    assert result.stats.diffuse_hits == 0
+
+
+def test_mirror_under_an_overcast_sky_and_the_sun_in_it():
+    """Along given rays: ρ L_sky(reflected direction), and ρ L_sun where it reflects the sun."""
+    scene = plane_scene("mirror", 0.8, sky=overcast_sky())
+    integ = Integrator(scene, QUICK)
+    s = sun_direction()
+    d = np.array([[0.0, 0.6, -0.8], [0.3, 0.8, -0.52], s * [1, 1, -1]])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = np.tile([0.0, 0.0, 1.5], (3, 1))
+    radiance, hits, rays = trace_view_paths(integ, o, d, np.random.default_rng(0))
+    reflected = d * [1, 1, -1]
+    expected = 0.8 * scene.sky.luminance(reflected)
+    expected[2] += 0.8 * E_DN / SUN_SOLID_ANGLE
+    np.testing.assert_allclose(radiance, expected, rtol=1e-6)
+    assert rays == 6 and len(hits["ray"]) == 0
+
+
+@pytest.mark.parametrize("reflectance", [0.0, None])
+def test_sky_through_a_constant_pane(reflectance):
+    """Through a pane: τ L; with the pane's reflection also ρ L of the sky behind the eye."""
+    tau = 0.6
+    scene = pane_scene(reflectance, tau)
+    rho = thin_pane_reflectance(tau) if reflectance is None else 0.0
+    view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 0.4 -vh 40 -vv 30")
+    result = render(scene, view, 16, 12, QUICK)
+    np.testing.assert_allclose(result.rgb, (tau + rho) * E_H / np.pi, rtol=1e-6)
+    # overcast sky along given rays: the reflected direction has the same altitude
+    scene = pane_scene(reflectance, tau, overcast_sky())
+    integ = Integrator(scene, QUICK)
+    d = np.array([[0.0, 1.0, 0.2], [0.5, 1.0, 0.7]])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    radiance, _, rays = trace_view_paths(integ, np.zeros((2, 3)), d, np.random.default_rng(0))
+    np.testing.assert_allclose(radiance, (tau + rho) * scene.sky.luminance(d), rtol=1e-6)
+    assert rays == (6 if rho > 0 else 4)
+
+
+def test_sky_through_a_fresnel_pane_at_the_rays_angle():
+    """Fresnel glazing: τ(θ) + ρ(θ) at each ray's own angle of incidence θ; at normal
+    incidence τ is the stated τ_n; towards grazing less comes through."""
+    from lbl_illum.scene.materials import glazing_optics, pane_transmissivity
+
+    tau_n = 0.6
+    scene = pane_scene(None, tau_n, overcast_sky(), model="fresnel")
+    integ = Integrator(scene, QUICK)
+    d = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.3], [1.5, 1.0, 0.2], [4.0, 1.0, 0.1]])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    radiance, _, _ = trace_view_paths(integ, np.tile([0.0, 0.0, 1.5], (4, 1)), d, np.random.default_rng(0))
+    tau, rho = glazing_optics(d[:, 1], pane_transmissivity(np.full(3, tau_n)))
+    np.testing.assert_allclose(radiance, (tau + rho) * scene.sky.luminance(d), rtol=1e-6)
+    np.testing.assert_allclose(tau[0], tau_n, rtol=1e-6)
+    transmitted = radiance[:, 1] / scene.sky.luminance(d)[:, 1] - rho[:, 1]
+    assert np.all(np.diff(transmitted[[0, 2, 3]]) < 0)
+
+
+def test_weak_branches_play_russian_roulette_without_bias():
+    """A pane reflecting 1e-3 (< WEIGHT_LIMIT): the reflected branch survives about
+    1e-3 / WEIGHT_LIMIT of the time with weight WEIGHT_LIMIT: the mean stays τ + ρ."""
+    tau, rho = 0.5, 1e-3
+    assert rho < WEIGHT_LIMIT
+    scene = pane_scene(rho, tau)
+    integ = Integrator(scene, QUICK)
+    n = 20000
+    d = np.tile([0.0, 1.0, 0.3], (n, 1)) / np.linalg.norm([0.0, 1.0, 0.3])
+    radiance, _, rays = trace_view_paths(integ, np.zeros((n, 3)), d, np.random.default_rng(1))
+    L = E_H / np.pi
+    values = np.unique(np.round(radiance[:, 1] / L, 9))
+    np.testing.assert_allclose(values, [tau, tau + WEIGHT_LIMIT])
+    survivors = (rays - 2 * n) / n                       # reflected branches traced
+    assert abs(survivors - rho / WEIGHT_LIMIT) < 4 * math.sqrt(0.25 / n)
+    np.testing.assert_allclose(radiance[:, 1].mean() / L, tau + rho, rtol=4 * math.sqrt(0.25 / n) * 2e-3)
+
+
+def test_light_surface_seen_directly_and_edge_pixels_are_sample_means():
+    """A parallel 8 m × 8 m view (1 m pixels) of a light covering x > 0.5 on black:
+    16 stratified samples per pixel put exactly 8 in each half of the edge column."""
+    geo = [{"shape": "rectangle", "origin": [0.5, -10, 0], "u": [20, 0, 0], "v": [0, 20, 0], "material": "lamp"}]
+    scene = make_scene(geo, {"lamp": {"type": "light", "luminance": 1000.0}}, {"type": "none"})
+    view = view_from_string("-vtl -vp 0 0 5 -vd 0 0 -1 -vu 0 1 0 -vh 8 -vv 8")
+    result = render(scene, view, 8, 8, QUICK, pixel_samples=16)
+    lum = result.luminance
+    np.testing.assert_allclose(lum[:, :4], 0.0)
+    np.testing.assert_allclose(lum[:, 4], 500.0, rtol=1e-6)
+    np.testing.assert_allclose(lum[:, 5:], 1000.0, rtol=1e-6)
+    one = render(scene, view, 8, 8, QUICK, pixel_samples=1).luminance   # jittered: 0 or 1000
+    assert set(np.unique(one[:, 4]).tolist()) <= {0.0, 1000.0}
+
+
+def test_fisheye_corners_are_invalid_and_zero():
+    """A hemispherical fisheye (-vth 180) fills the inscribed circle; the corners see nothing.
+    (A 180° angular fisheye's corners are valid rays looking behind, as in rpict.)"""
+    scene = plane_scene(with_sun=False)
+    view = view_from_string("-vth -vp 0 0 1.5 -vd 0 0 1 -vu 0 1 0 -vh 180 -vv 180")
+    result = render(scene, view, 16, 16, QUICK, pixel_samples=4)
+    assert not result.valid[0, 0] and not result.valid[-1, -1] and result.valid[8, 8]
+    assert np.all(result.rgb[~result.valid] == 0.0)
+    # every valid sample looks at the sky (above the horizon): pixel = mean of valid samples
+    np.testing.assert_allclose(result.rgb[result.valid], E_H / np.pi, rtol=1e-6)
+    assert 0.7 < result.valid.mean() < 0.85                   # π/4 of the square, plus edge pixels
+
+
+def test_aft_clipping_is_black_beyond_the_plane():
+    scene = plane_scene(with_sun=False)
+    view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 -0.6 -vh 40 -vv 20 -va 0.5")
+    result = render(scene, view, 8, 4, QUICK)
+    assert np.all(result.rgb == 0.0) and result.stats.diffuse_hits == 0
+
+
+@pytest.mark.parametrize("rho", [0.5])
+def test_integrating_sphere_walls_match_the_closed_form(rho):
+    R, r, L = 1.0, 0.1, 1000.0
+    geo = [{"shape": "sphere", "center": [0, 0, 0], "radius": R, "material": "wall"},
+           {"shape": "sphere", "center": [0, 0, 0], "radius": r, "material": "lamp"}]
+    scene = make_scene(geo, {"wall": {"type": "diffuse", "reflectance": rho},
+                             "lamp": {"type": "light", "luminance": L}}, {"type": "none"})
+    bounces = 8
+    opts = Options(accuracy=0.2, samples=128, bounces=bounces)
+    f = (r / R) ** 2
+    q = rho * (1 - f)
+    E = math.pi * L * f * (1 - q ** (bounces + 1)) / (1 - q)
+    walls = render(scene, view_from_string("-vtv -vp 0 0 0.5 -vd 1 0 0.2 -vh 60 -vv 60"), 32, 32, opts)
+    assert walls.stats.diffuse_hits == 32 * 32
+    mean = float(walls.luminance.mean())
+    assert abs(mean / (rho * E / math.pi) - 1) < 0.04, (mean, rho * E / math.pi)
+    lamp = render(scene, view_from_string("-vtv -vp 0 0 0.5 -vd 0 0 -1 -vu 0 1 0 -vh 5 -vv 5"), 4, 4, opts,
+                  cache=walls.cache)
+    np.testing.assert_allclose(lamp.rgb, L, rtol=1e-6)
+
+
+# -- plastic ------------------------------------------------------------------------------
+
+def plastic_scene(s, alpha, C=(0.2, 0.5, 0.8), sky=None, with_sun=False):
+    mats = {"plane": {"type": "plastic", "reflectance": list(C), "specularity": s, "roughness": alpha}}
+    return make_scene([PLANE], mats, sky or uniform_sky(), sun() if with_sun else None)
+
+
+def rays_at(incidence_deg, n):
+    """n camera rays from 1.5 m above the plane, meeting it at the given incidence."""
+    t = math.radians(incidence_deg)
+    d = np.tile([0.0, math.sin(t), -math.cos(t)], (n, 1))
+    return np.tile([0.0, 0.0, 1.5], (n, 1)), d
+
+
+@pytest.mark.parametrize("deg", [20.0, 60.0, 85.0])
+def test_polished_plastic_reflects_the_sky_with_radiance_fresnel_estimate(deg):
+    """Along given rays: known radiance ρ_s(θ) L_sky, one diffuse hit of weight
+    ρ_d(θ)/π = (1 − ρ_s(θ)) C/π, ρ_s(θ) = s + F(cos θ)(1 − s) (normal.c)."""
+    s, C = 0.05, np.array([0.2, 0.5, 0.8])
+    integ = Integrator(plastic_scene(s, 0.0), QUICK)
+    o, d = rays_at(deg, 4)
+    radiance, hits, rays = trace_view_paths(integ, o, d, np.random.default_rng(0))
+    F = math.exp(-5.85 * math.cos(math.radians(deg))) - 0.00202943064
+    rho_s = s + F * (1 - s)
+    np.testing.assert_allclose(radiance, rho_s * E_H / np.pi, rtol=1e-6)
+    np.testing.assert_allclose(hits["weight"], np.tile((1 - rho_s) * C / np.pi, (4, 1)), rtol=1e-12)
+    assert rays == 8 and list(hits["ray"]) == [0, 1, 2, 3]
+
+
+@pytest.mark.parametrize("alpha, deg", [(0.05, 30.0), (0.2, 75.0)])
+def test_rough_plastic_reflects_the_sky_by_its_lobe_albedo(alpha, deg):
+    from conftest import lobe_albedo
+
+    s, C = 0.1, np.array([0.2, 0.5, 0.8])
+    integ = Integrator(plastic_scene(s, alpha), QUICK)
+    n = 20000
+    o, d = rays_at(deg, n)
+    radiance, hits, _ = trace_view_paths(integ, o, d, np.random.default_rng(2))
+    L = radiance[:, 1] / (E_H / np.pi)                 # specular part, in units of L_sky
+    expected = s * lobe_albedo(math.radians(deg), alpha)
+    assert abs(L.mean() - expected) < 4 * L.std() / math.sqrt(n) + 1e-6, (L.mean(), expected)
+    np.testing.assert_allclose(radiance[:, 0], radiance[:, 2])            # a white highlight
+    np.testing.assert_allclose(hits["weight"], np.tile((1 - s) * C / np.pi, (n, 1)), rtol=1e-12)
+
+
+def test_rough_plastic_sun_highlight_is_counted_once():
+    """No sky; the sun at 40° altitude.  Rays meeting a rough plastic plane (α = 0.1)
+    where it mirrors the sun carry ρ_s f_s(v, s) cos θ_s E_dn each (the disk's centre: at
+    the lobe's peak it changes by < 0.5 % across the disk); rays tilted 0.15 rad away, on
+    the lobe's flank (±4 % across the disk), on average, within 0.3 %, and none above
+    1.1 times it.  Polished plastic shows the sun's disk in the mirror direction instead."""
+    s, alpha = 0.05, 0.1
+    integ = Integrator(plastic_scene(s, alpha, sky={"type": "none"}, with_sun=True), QUICK)
+    sd = sun_direction()
+    n = 30000
+    rng = np.random.default_rng(5)
+    for tilt in (0.0, 0.15):
+        d = sd * [1, 1, -1] + [tilt, 0.0, 0.0]
+        d = np.tile(d / np.linalg.norm(d), (n, 1))
+        o = np.tile([0.0, 0.0, 1.5], (n, 1))
+        radiance, hits, _ = trace_view_paths(integ, o, d, rng)
+        N = np.tile([0.0, 0.0, 1.0], (n, 1))
+        expected = s * ward_brdf(N[:1], d[:1], sd[None, :], alpha)[0] * sd[2] * E_DN
+        assert len(hits["ray"]) == n and np.allclose(radiance[:, 0], radiance[:, 2])
+        if tilt == 0.0:
+            assert expected > 0.5 * E_DN
+            np.testing.assert_allclose(radiance, expected, rtol=5e-3)      # every ray: no disk counted twice
+        else:
+            assert expected > 0.1 * E_DN
+            L = radiance[:, 1]
+            assert L.max() < 1.1 * expected and abs(L.mean() / expected - 1) < 3e-3
+    polished = Integrator(plastic_scene(s, 0.0, sky={"type": "none"}, with_sun=True), QUICK)
+    d = sd * [1, 1, -1]
+    radiance, _, _ = trace_view_paths(polished, np.array([[0.0, 0.0, 1.5]]), d[None, :], rng)
+    rho_s = s + float(plastic_fresnel(sd[2])) * (1 - s)
+    np.testing.assert_allclose(radiance[0], rho_s * E_DN / SUN_SOLID_ANGLE, rtol=1e-6)
+
+
+def test_polished_plastic_image_under_a_uniform_sky():
+    """A 0.5° view of the plane at 60° incidence: every pixel (ρ_d(θ) E + ρ_s(θ) E)/π with
+    E = E_h (the plane's illuminance through the cache, exact for a uniform sky): the
+    diffuse part goes through the cache like a diffuse surface's."""
+    s, C = 0.05, np.array([0.2, 0.5, 0.8])
+    view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 0.8660254 -0.5 -vh 0.5 -vv 0.5")
+    result = render(plastic_scene(s, 0.0), view, 8, 8, QUICK)
+    rho_s = s + (math.exp(-5.85 * 0.5) - 0.00202943064) * (1 - s)
+    expected = ((1 - rho_s) * C + rho_s) * E_H / np.pi
+    # ρ_s(θ) changes by ±0.0012 across the ±0.25° of the view: ±0.4 % of the red channel
+    np.testing.assert_allclose(result.rgb.reshape(-1, 3), np.tile(expected, (64, 1)), rtol=5e-3)
+    np.testing.assert_allclose(result.rgb.reshape(-1, 3).mean(axis=0), expected, rtol=1e-3)
+    assert result.stats.diffuse_hits == 64
+
+
+# -- the cache ------------------------------------------------------------------------
+
+def two_rooms():
+    """Two closed 3 m rooms 10 m apart, each with a lamp in the ceiling."""
+    geo, mats = [], {"wall": {"type": "diffuse", "reflectance": 0.5}, "lamp": {"type": "light", "luminance": 2000.0}}
+    for x in (0.0, 10.0):
+        geo.append({"shape": "box", "center": [x, 0, 1.5], "size": [3, 3, 3], "material": "wall"})
+        geo.append({"shape": "rectangle", "origin": [x - 0.3, -0.3, 2.99], "u": [0.6, 0, 0], "v": [0, 0.6, 0],
+                    "material": "lamp"})
+    return make_scene(geo, mats, {"type": "none"})
+
+
+ROOM_VIEW = "-vtv -vp -1.2 -1.2 1.6 -vd 1 1 0.3 -vh 70 -vv 70"
+FLOOR = np.column_stack([np.repeat(np.linspace(-1.2, 1.2, 7), 7), np.tile(np.linspace(-1.2, 1.2, 7), 7),
+                         np.full(49, 0.8)])
+UP = np.tile([0.0, 0.0, 1.0], (49, 1))
+
+
+def test_records_go_only_where_the_view_needs_them():
+    scene = two_rooms()
+    result = render(scene, view_from_string(ROOM_VIEW), 24, 20, QUICK)
+    assert result.stats.records_made == sum(result.stats.records) > 0
+    for lv in result.cache.levels:
+        P = lv.P[:lv.count]
+        assert np.all(np.abs(P[:, 0]) <= 1.5 + 1e-6), "a record in the room the camera is not in"
+    # the lamp in the ceiling is seen directly
+    assert result.luminance.max() == pytest.approx(2000.0)
+
+
+def test_a_render_and_an_illuminance_run_share_records_both_ways():
+    scene = two_rooms()
+    opts = image_options(QUICK)
+    view = view_from_string(ROOM_VIEW)
+    fresh_grid = Integrator(scene, opts).compute(FLOOR, UP).stats
+    fresh_image = render(scene, view, 24, 20, opts).stats
+    # render first, then the grid on its cache: the grid makes fewer records
+    image = render(scene, view, 24, 20, opts)
+    grid = Integrator(scene, opts, cache=image.cache).compute(FLOOR, UP).stats
+    assert grid.cache_hits > 0 and grid.primary_evaluations < fresh_grid.primary_evaluations
+    # the grid first, then the image on its cache
+    integ = Integrator(scene, opts)
+    integ.compute(FLOOR, UP)
+    before = sum(integ.cache.record_counts)
+    again = render(scene, view, 24, 20, opts, cache=integ.cache)
+    assert again.stats.cache_hits > 0 and again.stats.records_made < fresh_image.records_made
+    assert sum(again.stats.records) == before + again.stats.records_made
+    # a rerun on its own cache makes nothing and gives the same picture
+    rerun = render(scene, view, 24, 20, opts, cache=again.cache)
+    assert rerun.stats.records_made == 0
+    np.testing.assert_array_equal(rerun.rgb, again.rgb)
+
+
+def test_point_samples_are_not_used_for_images():
+    opts = Options(accuracy=0.2, samples=64, bounces=2, point_samples=512)
+    assert image_options(opts).point_samples is None
+    scene = two_rooms()
+    result = render(scene, view_from_string(ROOM_VIEW), 8, 6, opts)
+    assert result.options.point_samples is None
+    assert result.stats.new_records[0] < result.stats.diffuse_hits
+
+
+def test_view_spacing_ignores_far_outliers():
+    rng = np.random.default_rng(0)
+    room = rng.uniform([0, 0, 0], [4, 6, 3], (1000, 3))
+    far = rng.uniform([-100, -100, 0], [100, -50, 0], (30, 3))     # ground seen through a window
+    lo, hi = view_spacing(np.vstack([room, far]))
+    assert hi == pytest.approx(lo * 16)
+    assert 2.5 < hi < 4.5                                        # D/2 of the room's 7.8 m diagonal, trimmed
+    assert view_spacing(np.zeros((5, 3))) is None
+
+
+# -- views and the command -------------------------------------------------------------
+
+def test_named_views(tmp_path):
+    scene = two_rooms()
+    toml = tmp_path / "scene.toml"
+    toml.write_text('[views.corner]\nposition = [-1.2, -1.2, 1.6]\ntarget = [0, 0, 1]\nhorizontal = 70\n'
+                    '[views.desk]\nradiance = "-vta -vp 0 0 1.2 -vd 0 1 0"\n')
+    scene.path = toml
+    assert resolve_view(scene, "desk").type == "a"
+    assert resolve_view(scene, "corner").horizontal == 70.0
+    with pytest.raises(InputError, match="did you mean 'desk'"):
+        resolve_view(scene, "dsk")
+    scene.views = {"north": view_from_string("-vtv -vd 0 1 0")}      # a loader that keeps the views
+    assert resolve_view(scene, "north").direction == (0.0, 1.0, 0.0)
+    vf = tmp_path / "v.vf"
+    vf.write_text("rvu -vtv -vp 1 2 3 -vd 0 1 0 -vh 50 -vv 40\n")
+    assert resolve_view(scene, None, str(vf)).position == (1.0, 2.0, 3.0)
+    changed = resolve_view(scene, "-vh 30", str(vf))
+    assert changed.horizontal == 30.0 and changed.position == (1.0, 2.0, 3.0)
+    with pytest.raises(InputError, match="give a view"):
+        resolve_view(scene)
+
+
+ROOM_TOML = """units = "m"
+[[geometry]]
+shape = "box"
+center = [0, 0, 1.5]
+size = [3, 3, 3]
+material = "wall"
+[[geometry]]
+shape = "rectangle"
+origin = [-0.3, -0.3, 2.99]
+u = [0.6, 0, 0]
+v = [0, 0.6, 0]
+material = "lamp"
+[materials.wall]
+type = "diffuse"
+reflectance = 0.5
+[materials.lamp]
+type = "light"
+luminance = 2000
+[sky]
+type = "none"
+[settings]
+accuracy = 0.2
+samples = 64
+bounces = 2
+"""
+
+
+def command_args(tmp_path, **changes):
+    values = dict(scene=str(tmp_path / "room.toml"), view=ROOM_VIEW, view_file=None, x=32, y=32,
+                  output=str(tmp_path / "out.hdr"), pixel_samples=1, preview=None, falsecolor=None,
+                  falsecolor_max=None, falsecolor_scale="linear", cache=None, stats=None, quiet=True)
+    values.update(changes)
+    return argparse.Namespace(**values)
+
+
+def test_render_command_writes_the_image_with_its_view(tmp_path, capsys):
+    from lbl_illum.io.images import read_hdr_header, read_image
+
+    (tmp_path / "room.toml").write_text(ROOM_TOML)
+    args = command_args(tmp_path, preview=str(tmp_path / "p.png"), falsecolor=str(tmp_path / "f.png"),
+                        cache=str(tmp_path / "c.npz"), stats=str(tmp_path / "s.json"), quiet=False)
+    assert render_command(args) == 0
+    header = read_hdr_header(tmp_path / "out.hdr")
+    view = view_from_string(ROOM_VIEW)
+    assert header.view == view
+    assert (header.width, header.height) == view.resolution(32, 32)
+    image = read_image(tmp_path / "out.hdr")
+    assert image.rgb.shape == (header.height, header.width, 3)
+    assert image.luminance.max() == pytest.approx(2000.0, rel=1 / 256)
+    for name in ("p.png", "f.png", "c.npz", "s.json"):
+        assert (tmp_path / name).stat().st_size > 0
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert line.startswith("lbl-illum: render") and "records per level" in line and "rays" in line
+    # the second run reads the cache and adds nothing
+    import json
+
+    assert render_command(command_args(tmp_path, cache=str(tmp_path / "c.npz"), stats=str(tmp_path / "t.json"))) == 0
+    assert json.loads((tmp_path / "t.json").read_text())["records_made"] == 0
+
+
+def test_render_command_refuses_bad_input_before_writing(tmp_path):
+    (tmp_path / "room.toml").write_text(ROOM_TOML)
+    bad = [dict(output=str(tmp_path / "out.jpg")), dict(view="nowhere"), dict(view=None),
+           dict(view="-vtv -vh 200"), dict(preview=str(tmp_path / "p.jpg")), dict(x=0),
+           dict(point_samples=64), dict(cache=str(tmp_path / "no" / "c.npz"))]
+    for change in bad:
+        with pytest.raises(InputError) as info:
+            render_command(command_args(tmp_path, **change))
+        assert "\n" not in str(info.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["room.toml"]
+    # a cache made with point_samples is refused with the reason
+    scene_cache = tmp_path / "c.npz"
+    from lbl_illum.scene.scenefile import load_scene
+
+    scene = load_scene(tmp_path / "room.toml")
+    integ = Integrator(scene, scene.options.replace(point_samples=64))
+    integ.compute(FLOOR[:5], UP[:5])
+    integ.cache.save(scene_cache)
+    with pytest.raises(InputError, match="point_samples"):
+        render_command(command_args(tmp_path, cache=str(scene_cache)))
+
+
+# -- the paper's Figure 5 (validation/studies/figure5.py, quick version) ---------------
+
+@pytest.mark.slow
+def test_figure5_quick_study_holds_the_papers_claims():
+    """At equal rays (within 10 %) pure Monte Carlo's pixel noise in flat regions is at
+    least twice the cached image's, and level-0 records are denser near the blocks."""
+    pytest.importorskip("matplotlib")
+    from lbl_illum_studies import figure5
+    from lbl_illum_studies.report import StudyContext
+
+    report = figure5.run(StudyContext(quick=True))
+    res = report.results
+    assert all(res["checks"].values()), res["checks"]
+    assert res["noise"]["flat_pixels"] > 1000

@@ -1,0 +1,206 @@
+"""Radiance scene files as geometry and materials (lbl_illum.scene.radfile, scene loading)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lbl_illum.errors import InputError
+from lbl_illum.scene.radfile import read_rad, rad_surfaces, read_rad_surfaces
+from lbl_illum.scene.scenefile import load_scene
+
+
+def area(tri):
+    return 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+
+
+QUADRICS = """
+m sphere ball
+0
+0
+4 1 2 3 0.5
+
+m cylinder pipe
+0
+0
+7 0 0 0  0 0 2  0.25
+
+m cone lamp
+0
+0
+8 0 0 0  1 1 1  0.4 0.1
+
+m cone flat
+0
+0
+8 0 0 0  0 0 0.001  0.2 1.0
+
+m cup shade
+0
+0
+8 0 0 0  0 0 1  0.3 0.6
+
+m ring disk
+0
+0
+8 0 0 0  0 1 0  0 2
+
+m ring washer
+0
+0
+8 5 5 5  1 1 0  0.5 1.5
+"""
+
+EXACT = {
+    "ball": 4 * np.pi * 0.25,
+    "pipe": 2 * np.pi * 0.25 * 2,
+    "lamp": np.pi * 0.5 * np.hypot(np.sqrt(3), 0.3),
+    "flat": np.pi * 1.2 * np.hypot(0.001, 0.8),
+    "shade": np.pi * 0.9 * np.hypot(1, 0.3),
+    "disk": np.pi * 4,
+    "washer": np.pi * (1.5 ** 2 - 0.5 ** 2),
+}
+
+
+@pytest.mark.parametrize("name", list(EXACT))
+def test_quadric_areas_are_exact(tmp_path, name):
+    prims = [p for p in read_rad(_write(tmp_path, "q.rad", QUADRICS), "q.rad") if p.name == name]
+    (part,) = rad_surfaces([_with_modifier(p, name) for p in prims], "q.rad")
+    assert area(part.vertices) == pytest.approx(EXACT[name], rel=1e-6)
+
+
+def test_quadrics_lie_on_their_surfaces(tmp_path):
+    prims = read_rad(_write(tmp_path, "q.rad", QUADRICS), "q.rad")
+    parts = {p.name: p for p in rad_surfaces([_with_modifier(p, p.name) for p in prims], "q.rad")}
+    v = parts["ball"].vertices.reshape(-1, 3)
+    r = np.linalg.norm(v - [1, 2, 3], axis=1)
+    assert np.all(np.abs(r / 0.5 - 1) < 0.03)           # within 3 % of the radius, area exact
+    v = parts["pipe"].vertices.reshape(-1, 3)
+    assert np.allclose(v[:, 2].min(), 0) and np.allclose(v[:, 2].max(), 2)
+    assert np.all(np.abs(np.hypot(v[:, 0], v[:, 1]) / 0.25 - 1) < 0.01)
+    n = np.cross(parts["disk"].vertices[:, 1] - parts["disk"].vertices[:, 0],
+                 parts["disk"].vertices[:, 2] - parts["disk"].vertices[:, 0])
+    assert np.all(n[:, 1] > 0)                            # along the ring's normal
+    # a cup faces inwards, a cone outwards
+    for name, sign in (("shade", -1), ("lamp", 1)):
+        tri = parts[name].vertices
+        centre = tri.mean(axis=1)
+        normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        axis = np.array([0, 0, 1.0]) if name == "shade" else np.ones(3) / np.sqrt(3)
+        radial = centre - np.outer(centre @ axis, axis)
+        assert np.all(sign * np.einsum("ij,ij->i", normal, radial) > 0)
+
+
+def _write(folder, name, text):
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def _with_modifier(p, name):
+    p.modifier = name
+    return p
+
+
+KEYHOLE = """# a wall with a window hole, as SketchUp's exporter writes it
+void plastic wallpaint
+0
+0
+5 .5 .5 .5 0 0
+
+void glass pane
+0
+0
+3 .96 .96 .96
+
+void alias paint2 wallpaint
+
+wallpaint polygon south
+0
+0
+30 0 0 0  6 0 0  6 0 3  0 0 3  0 0 0  1 0 1  2 0 1  2 0 2  1 0 2  1 0 1
+
+pane polygon window
+0
+0
+12 1 0 1  2 0 1  2 0 2  1 0 2
+
+paint2 polygon north
+0
+0
+12 0 5 0  6 5 0  6 5 3  0 5 3
+"""
+
+
+def test_scene_from_radiance_files_alone(tmp_path):
+    _write(tmp_path, "room.rad", KEYHOLE)
+    _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "room.rad"\n[sky]\ntype = "uniform"\n'
+                                   'horizontal_illuminance = 1000\n')
+    scene = load_scene(tmp_path / "scene.toml")
+    by_name = {m.name: m for m in scene.materials}
+    assert set(by_name) == {"wallpaint", "pane"}                                  # paint2: an alias of wallpaint
+    assert by_name["wallpaint"].kind == "diffuse" and by_name["wallpaint"].reflectance == (0.5, 0.5, 0.5)
+    glass = by_name["pane"]
+    # Radiance's glass of transmissivity 0.96 transmits (1-r)^2 t/(1 - r^2 t^2) at normal incidence
+    r = ((1.52 - 1) / (1.52 + 1)) ** 2
+    assert glass.transmittance[0] == pytest.approx((1 - r) ** 2 * 0.96 / (1 - (r * 0.96) ** 2), rel=1e-9)
+    tri = scene.triangles
+    wall = tri.material == [m.name for m in scene.materials].index("wallpaint")
+    south = wall & (np.abs(tri.vertices[:, :, 1]).max(axis=1) < 1e-9)
+    assert tri.areas[south].sum() == pytest.approx(18 - 1)                       # the window stays open
+    assert tri.areas[wall & ~south].sum() == pytest.approx(18)                   # the north wall, by the alias
+
+
+def test_mapping_and_scene_tables_win_over_definitions(tmp_path):
+    _write(tmp_path, "room.rad", KEYHOLE)
+    _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "room.rad"\nmaterials = { pane = "clear" }\n'
+                                   '[materials.clear]\ntype = "glass"\ntransmittance = 0.8\nmodel = "constant"\n'
+                                   '[materials.wallpaint]\ntype = "diffuse"\nreflectance = 0.7\n'
+                                   '[sky]\ntype = "uniform"\nhorizontal_illuminance = 1000\n')
+    scene = load_scene(tmp_path / "scene.toml")
+    names = [m.name for m in scene.materials]
+    assert names == ["clear", "wallpaint"]
+    assert scene.materials[1].reflectance == (0.7, 0.7, 0.7)
+
+
+def test_definitions_from_a_separate_mat_file(tmp_path):
+    body = KEYHOLE.split("wallpaint polygon south")[0]
+    _write(tmp_path, "materials.mat", body)
+    _write(tmp_path, "walls.rad", "wallpaint polygon south" + KEYHOLE.split("wallpaint polygon south")[1])
+    _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "walls.rad"\n[[geometry]]\nfile = "materials.mat"\n'
+                                   '[sky]\ntype = "uniform"\nhorizontal_illuminance = 1000\n')
+    scene = load_scene(tmp_path / "scene.toml")
+    assert {m.name for m in scene.materials} == {"wallpaint", "pane"}
+
+
+@pytest.mark.parametrize("text, message", [
+    ("m polygon p\n0\n0\n7 0 0 0 1 0 0 1", "polygon 'p': needs 3 reals per vertex"),
+    ("m polygon p\n0\n0\n9 0 0 0 1 0 0 1 x 0", "line 1: polygon 'p': a real argument is not a number"),
+    ("m polygon p\n0\n0\n12 0 0 0 1 0 0", "12 real arguments announced, 6 left"),
+    ("m sphere s\n0\n0\n3 0 0 0", "sphere 's': needs 4 reals"),
+    ("!genbox m box 1 1 1", "line 1: the command '!genbox m box 1 1 1' needs Radiance"),
+    ("m polygon p\n0\n0", "missing its real argument count"),
+    ("m ring r\n0\n0\n8 0 0 0 0 0 1 2 2", "ring 'r': needs a normal and two different, non-negative radii"),
+])
+def test_malformed_files_are_refused_with_the_line(tmp_path, text, message):
+    path = _write(tmp_path, "bad.rad", text)
+    with pytest.raises(InputError, match="^bad.rad: .*" + message.replace("(", r"\(").replace(")", r"\)")
+                       .replace("!", r"\!")):
+        read_rad_surfaces(path, "bad.rad")
+
+
+def test_undefined_modifier_is_refused_naming_it(tmp_path):
+    _write(tmp_path, "room.rad", "unknown polygon p\n0\n0\n9 0 0 0 1 0 0 0 1 0\n")
+    _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "room.rad"\n[sky]\ntype = "uniform"\n'
+                                   'horizontal_illuminance = 1000\n')
+    with pytest.raises(InputError, match="modifier 'unknown' is not defined"):
+        load_scene(tmp_path / "scene.toml")
+
+
+def test_other_primitives_are_counted_in_one_warning(tmp_path):
+    text = KEYHOLE + "\nvoid mesh chair\n1 chair.rtm\n0\n0\n\nvoid instance tree\n1 tree.oct\n0\n0\n"
+    path = _write(tmp_path, "room.rad", text)
+    warnings = []
+    read_rad_surfaces(path, "room.rad", 1.0, warnings)
+    assert warnings == ["room.rad: skipped 1 'mesh', 1 'instance' primitives (read: polygon, sphere, bubble, "
+                        "cylinder, tube, cone, cup, ring)"]
