@@ -12,7 +12,7 @@ from ._version import __version__  # noqa: E402
 from .engine.cache import IrradianceCache  # noqa: E402
 from .errors import InputError  # noqa: E402
 from .engine.integrator import IlluminanceResult, Integrator, compute_illuminance  # noqa: E402
-from .engine.options import Options  # noqa: E402
+from .options import Options  # noqa: E402
 from .scene.scenefile import Scene, load_scene  # noqa: E402
 from .io.points import read_points, write_results  # noqa: E402
 

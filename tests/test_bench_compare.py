@@ -334,7 +334,7 @@ def test_corpus_ladders():
     (pure,) = [s for s in ours if s.family == "Monte Carlo"]
     assert pure.args == ["--accuracy", "0", "--samples", "1024", "--point-samples", "0", "--bounces", "10"]
     assert 1 <= len(cr.corpus_engine_ladder(quick=True)) <= 2
-    from lbl_illum.engine.options import PRESETS
+    from lbl_illum.options import PRESETS
 
     assert {p["bounces"] for p in PRESETS.values()} == {cr.CORPUS_BOUNCES}
     cube, zone = 120.0, (4 + 12 + 3) / 3

@@ -497,7 +497,7 @@ def test_every_command_leaves_its_outputs_alone(tmp_path, capsys, command, fault
 ])
 def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch, size, expect):
     """With 1 GiB said to be available: nothing is read, rendered or written."""
-    import lbl_illum.engine.render as render
+    import lbl_illum.cli.render as render
 
     monkeypatch.setattr(render, "_available_memory", lambda: 2 ** 30)
     monkeypatch.setattr(render, "render_command", lambda args: pytest.fail("render started"))
@@ -507,7 +507,7 @@ def test_render_sizes_are_refused_before_any_work(tmp_path, capsys, monkeypatch,
 
 
 def test_render_sizes_that_fit_go_ahead(tmp_path, capsys, monkeypatch):
-    import lbl_illum.engine.render as render
+    import lbl_illum.cli.render as render
 
     started = []
     monkeypatch.setattr(render, "_available_memory", lambda: 2 ** 30)

@@ -449,7 +449,7 @@ def cache_files(tmp_path_factory):
     """Two small valid cache files (round and elliptical record domains) of a box room
     with a window, at low settings; their bytes and their parsed header and arrays."""
     from lbl_illum.engine.integrator import Integrator
-    from lbl_illum.engine.options import Options
+    from lbl_illum.options import Options
 
     data = {"geometry": [{"shape": "box", "center": [0, 0, 1.5], "size": [4, 4, 3], "material": "wall"},
                          {"shape": "rectangle", "origin": [-1, -2, 1], "u": [2, 0, 0], "v": [0, 0, 1],

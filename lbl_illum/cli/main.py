@@ -19,7 +19,7 @@ from pathlib import Path
 from .._version import __version__
 from ..errors import InputError
 from .progress import ProgressBar
-from ..engine.options import INTERPOLATIONS, PRESETS, Options, preset_table
+from ..options import INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
 
 __all__ = ["main"]
@@ -224,7 +224,7 @@ def _build_parser() -> argparse.ArgumentParser:
     w.add_argument("--screenshot", metavar="PNG", help="write the view to this .png file instead of a window")
     w.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
-    from ..engine.render import add_render_arguments
+    from .render import add_render_arguments
     r = sub.add_parser("render", help="luminance image of a view (cd/m2) through the irradiance cache",
                        description="Render the luminance image of a Radiance view (cd/m2) through the "
                        "irradiance cache: .exr, .hdr (Radiance RGBE with VIEW= and EXPOSURE= headers) or .tif, "
@@ -733,7 +733,7 @@ def main(argv=None) -> int:
         if args.command == "view":
             return _run_view(args)
         if args.command == "render":
-            from ..engine.render import check_image_size, render_command
+            from .render import check_image_size, render_command
             check_image_size(args)          # before the scene is even read
             return render_command(args)
         if args.command == "validate":

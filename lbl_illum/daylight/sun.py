@@ -16,7 +16,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InputError, check_keys, get_number
-from ..engine.hemisphere import orthonormal_basis
+from ..scene.geometry import orthonormal_basis
 from .sky import MAX_EXTRATERRESTRIAL_ILLUMINANCE
 from .solar import Site, parse_time, solar_position, to_utc
 

@@ -17,25 +17,10 @@ from numba import njit, prange
 
 from .compiled import PARALLEL_MIN, serial_and_parallel
 from .lambert import lambert_edge
+from ..scene.geometry import orthonormal_basis
 
 __all__ = ["orthonormal_basis", "cell_counts", "stratified_directions", "cosine_directions", "irradiance_hessian",
            "irradiance_gradients", "limit_gradients"]
-
-
-def orthonormal_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two (n, 3) unit tangents completing (n, 3) unit ``normals`` to a right-handed frame.
-
-    Branch-free construction of Duff et al., "Building an Orthonormal Basis,
-    Revisited", JCGT 6(1), 2017.
-    """
-    n = np.asarray(normals, dtype=np.float64)
-    x, y, z = n[:, 0], n[:, 1], n[:, 2]
-    sign = np.where(z >= 0.0, 1.0, -1.0)
-    a = -1.0 / (sign + z)
-    b = x * y * a
-    t = np.stack([1.0 + sign * x * x * a, sign * b, -sign * x], axis=1)
-    s = np.stack([b, sign + y * y * a, -y], axis=1)
-    return t, s
 
 
 def cell_counts(samples: int) -> tuple[int, int]:

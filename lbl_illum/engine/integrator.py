@@ -60,7 +60,7 @@ from .hemisphere import (MAX_ANISOTROPY, cell_counts, cosine_directions, hessian
                          irradiance_hessian, leak_sectors, limit_gradients, orthonormal_basis, stratified_directions)
 from .lambert import portal_irradiance
 from ..scene.materials import GLASS, LIGHT, MIRROR, PLASTIC, PLASTIC_BRANCH_LIMIT, MaterialTable, russian_roulette
-from .options import Options
+from ..options import Options
 from .placement import distance_bands, pick_per_cell
 from ..photometry import luminance
 from .portals import build_portals

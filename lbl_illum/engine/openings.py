@@ -115,7 +115,8 @@ def find_openings(vertices: np.ndarray, glass: np.ndarray, tracer, rng: np.rando
     of the same triangles) tests where rays from a hole reach the sky."""
     import shapely
 
-    from .hemisphere import orthonormal_basis, stratified_directions
+    from ..scene.geometry import orthonormal_basis
+    from .hemisphere import stratified_directions
     from ..scene.polygons import triangulate_face
 
     vertices = np.asarray(vertices, np.float64)

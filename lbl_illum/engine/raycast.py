@@ -33,7 +33,7 @@ from embreex.mesh_construction import TriangleMesh
 
 from .compiled import PARALLEL_MIN, serial_and_parallel
 from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
-from .hemisphere import orthonormal_basis
+from ..scene.geometry import orthonormal_basis
 from ..scene.materials import GLASS
 
 __all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count"]

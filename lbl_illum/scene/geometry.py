@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import InputError, check_keys, get_number, get_vector, show
 
 __all__ = [
+    "orthonormal_basis",
     "Triangles", "MeshPart", "Shape", "SHAPE_KEYS", "SPHERE_SUBDIVISIONS", "SPHERE_MAX_DEVIATION",
     "PLANAR_TOLERANCE", "load_mesh_file", "shape_from_table", "sphere_triangles", "box_triangles",
     "rectangle_triangles", "polygon_triangles", "degenerate_mask",
@@ -604,3 +605,19 @@ class TriangleSampler:
             v = np.where(flip, 1.0 - b, b)
         x = V[:, 0] + u[:, None] * (V[:, 1] - V[:, 0]) + v[:, None] * (V[:, 2] - V[:, 0])
         return k, x, self.pdf_area(k)
+
+
+def orthonormal_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two (n, 3) unit tangents completing (n, 3) unit ``normals`` to a right-handed frame.
+
+    Branch-free construction of Duff et al., "Building an Orthonormal Basis,
+    Revisited", JCGT 6(1), 2017.
+    """
+    n = np.asarray(normals, dtype=np.float64)
+    x, y, z = n[:, 0], n[:, 1], n[:, 2]
+    sign = np.where(z >= 0.0, 1.0, -1.0)
+    a = -1.0 / (sign + z)
+    b = x * y * a
+    t = np.stack([1.0 + sign * x * x * a, sign * b, -sign * x], axis=1)
+    s = np.stack([b, sign + y * y * a, -y], axis=1)
+    return t, s

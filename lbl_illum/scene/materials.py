@@ -84,7 +84,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InputError, check_keys, get_number, get_rgb, show
-from ..engine.hemisphere import orthonormal_basis
+from .geometry import orthonormal_basis
 from ..photometry import luminance
 
 __all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING", "GLASS_INDEX",

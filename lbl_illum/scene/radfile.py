@@ -203,7 +203,7 @@ def _circle(n: int) -> np.ndarray:
 
 def _frame(axis: np.ndarray):
     """Two unit vectors completing ``axis`` (unit) to a right-handed frame."""
-    from ..engine.hemisphere import orthonormal_basis
+    from .geometry import orthonormal_basis
 
     t, b = orthonormal_basis(axis[None])
     return t[0], b[0]

@@ -45,7 +45,7 @@ from ..io.files import read_text_file
 from .geometry import (MAX_COORDINATE, Triangles, degenerate_mask, duplicate_mask, load_mesh_file,
                        polygon_triangles, shape_from_table)
 from .materials import Material, MaterialTable, material_from_table
-from ..engine.options import MAX_BOUNCES, Options, scene_defaults
+from ..options import MAX_BOUNCES, Options, scene_defaults
 from ..daylight.sky import CIEGeneralSky, PerezSky, Sky, perez_sky_from_weather, sky_from_table
 from ..daylight.solar import day_of_year, read_epw, site_from_table, solar_position, to_utc
 from ..daylight.sun import Sun, sun_from_table, sun_position_at

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from lbl_illum.cli.main import main
-from lbl_illum.engine.options import PRESETS
+from lbl_illum.options import PRESETS
 from lbl_illum.io.points import read_points
 
 from conftest import EXAMPLES

@@ -8,7 +8,7 @@ import pytest
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.scene.materials import GLASS
 from lbl_illum.engine.openings import find_openings
-from lbl_illum.engine.options import Options
+from lbl_illum.options import Options
 from lbl_illum.engine.raycast import Tracer
 from lbl_illum.scene.scenefile import scene_from_dict
 

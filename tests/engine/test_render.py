@@ -33,8 +33,8 @@ from lbl_illum import Options
 from lbl_illum.errors import InputError
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.scene.materials import plastic_fresnel, thin_pane_reflectance, ward_brdf
-from lbl_illum.engine.render import (WEIGHT_LIMIT, image_options, render, render_command, resolve_view,
-                              trace_view_paths, view_spacing)
+from lbl_illum.cli.render import render_command, resolve_view
+from lbl_illum.engine.render import WEIGHT_LIMIT, image_options, render, trace_view_paths, view_spacing
 from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
 from lbl_illum.scene.views import View, view_from_string
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from lbl_illum.errors import InputError
-from lbl_illum.engine.options import Options
+from lbl_illum.options import Options
 from lbl_illum.scene.scenefile import Scene, load_scene, scene_from_dict
 from lbl_illum.daylight.sky import CIEOvercastSky, NoSky
 

@@ -304,7 +304,7 @@ def ambient_resolution(f: float, cube: float, zone_size: float) -> int:
     return max(1, int(f * cube / zone_size))
 
 
-#: Diffuse bounces on corpus cases: those of every preset (lbl_illum.engine.options.PRESETS; a test
+#: Diffuse bounces on corpus cases: those of every preset (lbl_illum.options.PRESETS; a test
 #: keeps them equal), given to the explicit settings and, plus one, to Radiance's -ab.
 CORPUS_BOUNCES = 10
 #: Radiance's ladders per kind of scene: -ab of every run; (-aa, -ad) pairs at -as = -ad/2;
@@ -1559,7 +1559,7 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
             "kinds before the first case) fills the kernel cache.  Illuminance: column `illuminance` of the CSV; "
             "records: the sum over levels of `records` in the stats, rays: `rays`; “compute” is the stats' "
             f"`compute_seconds`.  FLAGS: {'; '.join(f'`{s.label}`' for s in ladder)} (the presets are "
-            "`lbl_illum.engine.options.PRESETS`; explicit flags leave the rest at the command's defaults).",
+            "`lbl_illum.options.PRESETS`; explicit flags leave the rest at the command's defaults).",
             f"Radiance on corpus cases: the scene exported once by `lbl_illum.io.radiance.export_radiance` (glass as a "
             f"constant-coefficient BRTDfunc; export time not counted), then `oconv` (timed once per case) and "
             f"`rtrace -I -h -n {args.processes}` with `-ab {CORPUS_BOUNCES + 1}` (= our {CORPUS_BOUNCES} bounces: Radiance "

@@ -478,7 +478,7 @@ def _section_triangles(report, res, rep):
 # ---------------------------------------------------------------------------------------
 
 def parse_args(argv=None):
-    from lbl_illum.engine.options import PRESETS
+    from lbl_illum.options import PRESETS
 
     parser = argparse.ArgumentParser(
         prog="cost_growth.py",

@@ -53,7 +53,7 @@ from embreex.mesh_construction import TriangleMesh
 import numba
 
 from lbl_illum import Options, load_scene, read_points
-from lbl_illum.engine.options import PRESETS
+from lbl_illum.options import PRESETS
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.engine.raycast import thread_count
 

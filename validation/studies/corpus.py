@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lbl_illum.engine.options import DEFAULT_PRESET, PRESETS
+from lbl_illum.options import DEFAULT_PRESET, PRESETS
 
 from .corpus_scenes import SCENES, cases, corpus_root, prepare, reference_path
 from .report import Report, StudyContext, error_summary, fmt, new_figure, pct

@@ -44,7 +44,7 @@ import numpy as np
 from lbl_illum import Integrator, Options
 from lbl_illum.errors import InputError, plural
 from lbl_illum.engine.hemisphere import cell_counts
-from lbl_illum.engine.options import BOUNCE_ACCURACY_CAP
+from lbl_illum.options import BOUNCE_ACCURACY_CAP
 from lbl_illum.engine.raycast import ON_SURFACE_FRACTION, SELF_HIT_EPSILON
 from lbl_illum.scene.scenefile import scene_from_dict
 from lbl_illum.daylight.sun import SUN_SOLID_ANGLE

@@ -21,7 +21,7 @@ import numpy as np
 
 from lbl_illum import Options, compute_illuminance, load_scene, read_points
 from lbl_illum.errors import InputError
-from lbl_illum.engine.options import PRESETS
+from lbl_illum.options import PRESETS
 
 from . import repository_root
 from .report import Report, StudyContext, error_summary, fmt, new_figure, pct

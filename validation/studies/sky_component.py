@@ -35,7 +35,7 @@ outside its edges' vertical projection, under its corners, well outside the proj
 near the walls.  Skies: the 15 CIE standard general skies (ISO 15469:2004) with the sun at
 altitude 40°, azimuth 210° (south-south-west; it shapes the sky and adds no direct light),
 and the traditional CIE overcast sky (Moon & Spencer 1942), each of E_h = 10,000 lux.  The
-tool runs at the scene defaults (:func:`lbl_illum.engine.options.scene_defaults`, the ``high``
+tool runs at the scene defaults (:func:`lbl_illum.options.scene_defaults`, the ``high``
 preset), with one seed per run.  The criterion of issue 5 is |SC_tool / SC_ref − 1| ≤ 5 %
 at every sensor.
 
@@ -54,7 +54,7 @@ import time
 import numpy as np
 
 from lbl_illum import compute_illuminance
-from lbl_illum.engine.options import DEFAULT_PRESET, scene_defaults
+from lbl_illum.options import DEFAULT_PRESET, scene_defaults
 from lbl_illum.scene.scenefile import scene_from_dict
 
 from .report import Report, StudyContext, fmt, new_figure, pct

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from lbl_illum.errors import InputError
-from lbl_illum.engine.options import PRESET_MEASURED, PRESETS, Options, preset_table
+from lbl_illum.options import PRESET_MEASURED, PRESETS, Options, preset_table
 
 from conftest import ROOT
 

@@ -56,7 +56,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from ..errors import InputError, check_keys
+from .errors import InputError, check_keys
 
 __all__ = ["Options", "PRESETS", "DEFAULT_PRESET", "scene_defaults", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
 
