@@ -18,6 +18,7 @@ from pathlib import Path
 
 from .._version import __version__
 from ..errors import InputError
+from ..optional import check as check_optional
 from .progress import ProgressBar
 from ..options import INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
@@ -662,10 +663,7 @@ def _run_validate(args) -> int:
     studies = _studies()
     STUDIES, StudyContext, run_study = studies.STUDIES, studies.StudyContext, studies.run_study
 
-    import importlib.util
-
-    if importlib.util.find_spec("matplotlib") is None:
-        raise InputError("validate: the reports need matplotlib; install it with pip install 'lbl_illum[plots]'")
+    check_optional("matplotlib", "validate: the reports")
     names = list(STUDIES) if args.study == "all" else [args.study]
     report_dir = Path(args.report)
     if report_dir.exists() and not report_dir.is_dir():

@@ -16,7 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from ..optional import check as check_optional
 from ..options import Options
+from ..engine.integrator import Integrator
 from ..engine.render import RenderResult, image_options, render
 from ..errors import InputError, plural
 from ..scene.scenefile import Scene
@@ -196,6 +198,8 @@ def _check_outputs(args) -> None:
     for png in (_arg(args, "preview"), _arg(args, "falsecolor")):
         if png:
             check_image_path(png, (".png",))
+    if _arg(args, "falsecolor"):
+        check_optional("matplotlib", f"--falsecolor {Path(args.falsecolor).name}")
     for extra in (_arg(args, "cache"), _arg(args, "stats")):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")

@@ -54,6 +54,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InputError, check_keys, get_number
+from ..optional import available
 
 __all__ = [
     "Site", "SolarPosition", "WeatherFile", "WeatherRecord", "SOLAR_CONSTANT", "SOLAR_POSITION_METHODS",
@@ -196,8 +197,7 @@ class SolarPosition:
 
 def have_pvlib() -> bool:
     """Whether pvlib can be imported (without importing it)."""
-    import importlib.util
-    return importlib.util.find_spec("pvlib") is not None
+    return available("pvlib")
 
 
 def pressure_at_elevation(elevation: float) -> float:

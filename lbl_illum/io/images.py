@@ -65,7 +65,6 @@ with ``Lw > 0``; or by a fixed ``exposure``), compressed by
 
 from __future__ import annotations
 
-import io
 import math
 import os
 import shlex
@@ -80,6 +79,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import InputError
 from .files import atomic_write_bytes
+from ..optional import require
 from ..photometry import luminance, luminance_weights
 from .radiance import RADIANCE_EFFICACY, RADIANCE_RGB_WEIGHTS
 from ..scene.views import View, view_from_header
@@ -109,11 +109,7 @@ _MIN_RUN = 4
 
 def _oiio():
     """The OpenImageIO module, or a readable error when it is not installed."""
-    try:
-        import OpenImageIO
-    except ImportError:  # pragma: no cover - depends on the installation
-        raise InputError("EXR and TIFF files, and reading images, need OpenImageIO (pip install OpenImageIO)") from None
-    return OpenImageIO
+    return require("OpenImageIO", "EXR, TIFF and PNG files, and reading images,")
 
 
 def _check_pixels(rgb: Any) -> np.ndarray:
@@ -633,21 +629,16 @@ def preview_pixels(rgb: np.ndarray, key: float = 0.18, exposure: float | None = 
 
 
 def write_png(path: str | os.PathLike, pixels: np.ndarray, description: str | None = None) -> Path:
-    """Write (h, w, 3 or 4) uint8 pixels as a PNG, atomically (Pillow, matplotlib's image library)."""
-    from PIL import Image
-    from PIL.PngImagePlugin import PngInfo
-
+    """Write (h, w, 3 or 4) uint8 pixels as a PNG, atomically (OpenImageIO), with the
+    software and ``description`` as text chunks."""
     path = check_image_path(path, (".png",))
     pixels = np.asarray(pixels)
     if pixels.dtype != np.uint8 or pixels.ndim != 3 or pixels.shape[2] not in (3, 4):
         raise ValueError(f"a PNG needs (h, w, 3|4) uint8 pixels, got {pixels.dtype} {pixels.shape}")
-    info = PngInfo()
-    info.add_text("Software", f"lbl_illum {__version__}")
+    attributes = {"Software": f"lbl_illum {__version__}"}
     if description:
-        info.add_text("Description", description)
-    buffer = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(pixels)).save(buffer, format="PNG", pnginfo=info)
-    atomic_write_bytes(path, buffer.getvalue())
+        attributes["ImageDescription"] = description
+    _oiio_write(path, pixels, "uint8", attributes)
     return path
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.files import atomic_write_bytes
+from ..optional import check
 
 __all__ = ["plan_plot", "check_plot_path", "PLOT_FORMATS", "nice_length"]
 
@@ -42,11 +43,7 @@ def check_plot_path(path: str | os.PathLike, formats=PLOT_FORMATS) -> Path:
         raise InputError(f"{path.name}: a plot must end in {', '.join(formats)}")
     if str(path.parent) and not path.parent.is_dir():
         raise InputError(f"{path}: folder {path.parent} does not exist")
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        raise InputError(f"{path.name}: plots need matplotlib; install it with pip install "
-                         "'lbl_illum[plots]'") from None
+    check("matplotlib", f"{path.name}: plots")
     return path
 
 

@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.files import atomic_write_bytes
+from ..optional import available, require
 
 __all__ = ["GeometryLayer", "PointLayer", "CacheLayer", "ViewFrame", "record_outlines", "read_cache_layer", "render",
            "check_view_path", "offscreen_available", "require_pyvista", "SCREENSHOT_FORMATS"]
@@ -62,11 +62,7 @@ ROI_GROWTH = 0.3
 
 def require_pyvista():
     """The pyvista module, or an :class:`InputError` saying how to install it."""
-    try:
-        import pyvista
-    except ImportError:
-        raise InputError("3-D views need pyvista; install it with pip install 'lbl_illum[view]'") from None
-    return pyvista
+    return require("pyvista")
 
 
 def check_view_path(path: str | os.PathLike) -> Path:
@@ -113,9 +109,7 @@ def offscreen_available() -> tuple[bool, str]:
     The trial runs in a child process (a missing OpenGL library can abort the process
     that tries), with a 120 s limit.
     """
-    try:
-        import pyvista  # noqa: F401
-    except ImportError:
+    if not available("pyvista"):
         return False, "pyvista is not installed (pip install 'lbl_illum[view]')"
     try:
         proc = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=120)
@@ -429,10 +423,6 @@ def render(scene, layers: list | None = None, points: np.ndarray | None = None,
 
 def _write_png(path: Path, image: np.ndarray) -> None:
     """Write an (h, w, 3 or 4) uint8 image as PNG, atomically."""
-    import io
+    from ..io.images import write_png
 
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(image)).save(buf, format="PNG")
-    atomic_write_bytes(path, buf.getvalue())
+    write_png(path, np.ascontiguousarray(image), "lbl_illum 3-D view")
