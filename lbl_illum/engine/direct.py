@@ -32,7 +32,7 @@ import numpy as np
 
 from ..scene.geometry import TriangleSampler
 from ..scene.materials import GLASS, LIGHT, MaterialTable, ward_brdf
-from .raycast import MAX_GLASS_LAYERS, SELF_HIT_EPSILON, Tracer
+from .raycast import MAX_GLASS_LAYERS, Tracer, step_past
 from ..daylight.sun import SUN_COS_HALF_ANGLE, Sun
 from .sunmirrors import NOTE_SHARE, SunMirrors
 
@@ -255,8 +255,7 @@ class DirectLight:
                 break
             cos_i = np.abs(np.einsum("ij,ij->i", self.tracer.normals[prim], d))
             product[live] *= self.materials.glass_transmittance(self.tracer.triangles.material[prim], cos_i)
-            step = t + SELF_HIT_EPSILON * (np.abs(o).max(axis=1) + t + self.tracer.length_scale)
-            o = o + step[:, None] * d
+            o, step = step_past(o, d, t, self.tracer.length_scale)
             tm = tm - step
         T[todo] = np.where(T[todo] > 0.0, product, 0.0)
         return T

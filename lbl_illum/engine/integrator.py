@@ -65,7 +65,7 @@ from .placement import distance_bands, pick_per_cell
 from ..photometry import luminance
 from .portals import build_portals
 from ..scene.geometry import TriangleSampler, Triangles
-from .raycast import SELF_HIT_EPSILON, Hits, Tracer
+from .raycast import Hits, Tracer, step_past
 from ..scene.scenefile import Scene
 
 __all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint"]
@@ -777,8 +777,7 @@ class Integrator:
             dist = start + tt                                 # from the ray's origin
             cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], d))
             density[live] += self.portals.pdf_area(kk) * dist ** 2 / np.maximum(cos_p, 1e-300)
-            step = tt + SELF_HIT_EPSILON * (np.abs(o).max(axis=1) + tt + self._openings.length_scale)
-            o = o + step[:, None] * d
+            o, step = step_past(o, d, tt, self._openings.length_scale)
             start, tmax = start + step, tmax - step
         return density
 

@@ -36,7 +36,7 @@ from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
 from ..scene.geometry import orthonormal_basis
 from ..scene.materials import GLASS
 
-__all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count"]
+__all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count", "step_past"]
 
 #: Relative offset of ray origins off the surface they leave (see module docstring).
 SELF_HIT_EPSILON = 1e-5
@@ -87,6 +87,17 @@ def _plane_hits_kernel(o, d, t, prim, index, normals, v0, p, ng):
 
 
 _plane_hits = serial_and_parallel(_plane_hits_kernel)
+
+
+def step_past(origins: np.ndarray, directions: np.ndarray, t: np.ndarray, length_scale: float):
+    """Rays that hit a surface at distances ``t`` [m] (a pane, an opening) continue
+    beyond it: ``(new origins, step)``, the origins moved along ``directions`` by
+    step = t + ε, ε = SELF_HIT_EPSILON · (|o|∞ + t + the scene's length scale), so that
+    the next query does not find the same surface again.  The one rule for stepping
+    past a surface along a ray (shadow rays through glass, portal densities through
+    openings)."""
+    step = t + SELF_HIT_EPSILON * (np.abs(origins).max(axis=1) + t + length_scale)
+    return origins + step[:, None] * directions, step
 
 
 @dataclass
@@ -209,8 +220,7 @@ class Tracer:
             crossed = prim >= 0
             live, o, d, tm, t, prim = live[crossed], o[crossed], d[crossed], tm[crossed], t[crossed], prim[crossed]
             result[live] *= self._glass_tau[prim]
-            step = t + SELF_HIT_EPSILON * (np.abs(o).max(axis=1) + t + self.length_scale)
-            o = o + step[:, None] * d
+            o, step = step_past(o, d, t, self.length_scale)
             tm = tm - step
         else:
             result[live] = 0.0     # more layers than a window has: treat as blocked
