@@ -68,7 +68,8 @@ from ..scene.geometry import TriangleSampler, Triangles
 from .raycast import Hits, Tracer, step_past
 from ..scene.scenefile import Scene
 
-__all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint"]
+__all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint",
+           "default_spacing", "spacing_rng"]
 
 #: Specular (glass, mirror) interactions a hemisphere ray may follow.
 MAX_SPECULAR_DEPTH = 8
@@ -252,6 +253,34 @@ class _Pending:
         return getattr(self, name)[0]
 
 
+def spacing_rng(seed: int) -> np.random.Generator:
+    """The random stream of :func:`default_spacing` for a run of ``seed``."""
+    return np.random.default_rng(np.random.SeedSequence([seed, _TAG_PROBE]))
+
+
+def default_spacing(tracer: Tracer, points, normals, rng: np.random.Generator) -> tuple[float, float]:
+    """(min, max) record spacing [m] from the extent of the queries.
+
+    D = max(diagonal of the queries' box, 2 × median distance from the queries to the
+    surfaces they see, by 16 cosine-distributed rays from each of up to 256 of them);
+    max = D/2 (:data:`MAX_SPACING_FRACTION`), min = max/16 (:data:`SPACING_RATIO`).  The
+    scene's bounding box plays no part.
+    """
+    diag = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    pick = rng.choice(len(points), size=min(len(points), 256), replace=False)
+    o = tracer.offset(points[pick], normals[pick])
+    o = np.repeat(o, 16, axis=0)
+    d = cosine_directions(np.repeat(normals[pick], 16, axis=0), rng)
+    t = tracer.intersect(o, d).t
+    t = t[np.isfinite(t)]
+    probe = float(np.median(t)) if len(t) else 0.0
+    D = max(diag, 2.0 * probe)
+    if D <= 0.0:
+        D = 1.0
+    max_spacing = MAX_SPACING_FRACTION * D
+    return max_spacing / SPACING_RATIO, max_spacing
+
+
 class Integrator:
     """Computes illuminance for one scene and one set of options, with a cache.
 
@@ -365,26 +394,9 @@ class Integrator:
 
     # -- spacing ----------------------------------------------------------------------
     def default_spacing(self, points, normals) -> tuple[float, float]:
-        """(min, max) record spacing [m] from the extent of the queries.
-
-        D = max(diagonal of the queries' box, 2 × median distance from the queries to
-        the surfaces they see); max = D/2, min = max/16.  The scene's bounding box
-        plays no part.
-        """
-        diag = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
-        rng = self._rng(_TAG_PROBE)
-        pick = rng.choice(len(points), size=min(len(points), 256), replace=False)
-        o = self.tracer.offset(points[pick], normals[pick])
-        o = np.repeat(o, 16, axis=0)
-        d = cosine_directions(np.repeat(normals[pick], 16, axis=0), rng)
-        t = self.tracer.intersect(o, d).t
-        t = t[np.isfinite(t)]
-        probe = float(np.median(t)) if len(t) else 0.0
-        D = max(diag, 2.0 * probe)
-        if D <= 0.0:
-            D = 1.0
-        max_spacing = MAX_SPACING_FRACTION * D
-        return max_spacing / SPACING_RATIO, max_spacing
+        """(min, max) record spacing [m] from the extent of the queries
+        (:func:`default_spacing`, with this run's seed)."""
+        return default_spacing(self.tracer, points, normals, spacing_rng(self.options.seed))
 
     # -- hemisphere rays ----------------------------------------------------------------
     def trace_paths(self, origins, directions, rng, through=None, portal_mis=None):

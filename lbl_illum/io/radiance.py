@@ -664,9 +664,11 @@ def _default_max_spacing(scene, points, normals) -> float | None:
         return scene.options.max_spacing * scene.unit_scale
     if points is None or len(points) == 0:
         return None
-    from ..engine.integrator import Integrator
+    from ..engine.integrator import default_spacing, spacing_rng
+    from ..engine.raycast import Tracer
 
-    return float(Integrator(scene, scene.options).default_spacing(points, normals)[1])
+    tracer = Tracer(scene.triangles, scene.material_table.kind, scene.material_table.transmittance)
+    return float(default_spacing(tracer, points, normals, spacing_rng(scene.options.seed))[1])
 
 
 def _bounds(scene) -> np.ndarray:
