@@ -105,7 +105,7 @@ def prepare(folder, scene=GOOD, points=GOOD_POINTS, files=None):
 def cache_file(**edit):
     """A function writing a one-record cache file with the module's own writer (so its
     checksum is right) whose arrays ``edit`` changes: a file no run wrote."""
-    from lbl_illum.engine.cache import CACHE_FORMAT, CacheData, write_cache_file
+    from lbl_illum.io.cachefile import CACHE_FORMAT, CacheData, write_cache_file
 
     def write(path):
         arrays = {"L0_P": np.zeros((1, 3)), "L0_N": np.array([[0, 0, 1]], np.float32),

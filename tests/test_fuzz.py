@@ -34,7 +34,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from lbl_illum.engine.cache import CacheData, IrradianceCache, LevelRecords, write_cache_file
+from lbl_illum.engine.cache import IrradianceCache, LevelRecords
+from lbl_illum.io.cachefile import CacheData, write_cache_file
 from lbl_illum.errors import InputError
 from lbl_illum.scene.geometry import MAX_COORDINATE
 from lbl_illum.scene.scenefile import Scene, load_scene, scene_from_dict

@@ -14,7 +14,7 @@ ALLOWED = {
     "shared": set(),
     "scene": {"daylight", "io.files"},
     "daylight": {"scene.geometry"},
-    "engine": {"scene", "daylight", "io.files", "io.locking"},
+    "engine": {"scene", "daylight", "io.cachefile"},
 }
 
 

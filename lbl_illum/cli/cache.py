@@ -89,7 +89,8 @@ def cache_statistics(path) -> dict:
     (photometric E_i), ``memory_bytes`` once loaded, and the root cube), ``records`` and
     ``memory_bytes`` in total.
     """
-    from ..engine.cache import IrradianceCache, read_cache_file
+    from ..engine.cache import IrradianceCache
+    from ..io.cachefile import read_cache_file
     from ..photometry import luminance
 
     data = read_cache_file(path)
@@ -194,7 +195,7 @@ def _info(args) -> int:
 # -- merge ---------------------------------------------------------------------------------
 
 def _merge(args) -> int:
-    from ..engine.cache import merge_cache_data, read_cache_file, settings_differences, write_cache_file
+    from ..io.cachefile import merge_cache_data, read_cache_file, settings_differences, write_cache_file
     from ..io.locking import file_lock
 
     out = Path(args.output)

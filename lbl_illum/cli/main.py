@@ -752,7 +752,7 @@ def main(argv=None) -> int:
         kept = ""
         if getattr(exc, "saved_cache", None):
             kept = f"; {sum(exc.saved_records):,} complete records kept in {exc.saved_cache}"
-        terminated = type(exc).__name__ == "Terminated"      # SIGTERM (lbl_illum.engine.cache.Terminated)
+        terminated = type(exc).__name__ == "Terminated"      # SIGTERM (lbl_illum.io.cachefile.Terminated)
         print(f"lbl-illum: {'terminated' if terminated else 'interrupted'}{kept}", file=sys.stderr)
         return 143 if terminated else 130
     except OSError as exc:

@@ -1018,7 +1018,7 @@ class Integrator:
         records of the levels it has evaluated (see :meth:`compute`).  Records read
         replace those the integrator held.
         """
-        from .cache import CacheFile, record_settings
+        from ..io.cachefile import CacheFile, record_settings
 
         cache_file = CacheFile(path, rebuild)
         cache = cache_file.read(self.fingerprint, record_settings(self.scene, self.options))
@@ -1099,7 +1099,7 @@ class Integrator:
         as the first run did (their records and random streams are the same), and so
         gives bit-identical results to a run that was never interrupted.
         """
-        from .cache import deferred_interrupts, record_settings, sigterm_as_interrupt
+        from ..io.cachefile import deferred_interrupts, record_settings, sigterm_as_interrupt
 
         t0 = time.perf_counter()
         self._rays_reported = rays_before = self.tracer.rays_traced

@@ -346,8 +346,8 @@ class CacheLayer:
 def read_cache_layer(path: str | os.PathLike, show=None) -> CacheLayer:
     """A :class:`CacheLayer` of the cache file ``path``.  Any lbl_illum cache file is
     drawn, whatever scene and settings it was made for; anything else is refused with
-    one line (:class:`InputError`, from :func:`lbl_illum.engine.cache.read_cache_file`)."""
-    from ..engine.cache import read_cache_file
+    one line (:class:`InputError`, from :func:`lbl_illum.io.cachefile.read_cache_file`)."""
+    from ..io.cachefile import read_cache_file
 
     layer = CacheLayer.from_cache(read_cache_file(path), show)
     if show is not None:

@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from lbl_illum import InputError, IrradianceCache, Options, load_scene, read_points
-from lbl_illum.engine.cache import (CACHE_FORMAT_VERSION, CacheData, merge_cache_data, read_cache_file, record_settings,
-                              write_cache_file)
+from lbl_illum.io.cachefile import CACHE_FORMAT_VERSION, CacheData, merge_cache_data, read_cache_file, record_settings, write_cache_file
 from lbl_illum.engine.integrator import Integrator
 
 from conftest import EXAMPLES, ROOT
@@ -242,7 +241,7 @@ def test_version_1_files_are_still_read(office, saved, tmp_path):
     the version-2 file of the same records does."""
     path, integ = saved
     data = read_cache_file(path)
-    from lbl_illum.engine.cache import _checksum_v1
+    from lbl_illum.io.cachefile import _checksum_v1
     h = data.header
     old = {"format": h["format"], "version": 1, "fingerprint": h["fingerprint"], "domains": h["domains"],
            "accuracy": [lv["accuracy"] for lv in h["levels"]], "records": data.record_counts,
