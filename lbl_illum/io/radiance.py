@@ -177,7 +177,7 @@ def _rgb(values) -> str:
 
 
 GLAZING_CAL = """\
-{ lbl_glazing.cal: the Fresnel glazing of lbl_illum (lbl_illum/materials.py), written by
+{ lbl_glazing.cal: the Fresnel glazing of lbl_illum (lbl_illum/scene/materials.py), written by
   lbl-illum export radiance, for
     void BRTDfunc NAME
     10 glz_rr glz_rg glz_rb glz_tr glz_tg glz_tb 0 0 0 lbl_glazing.cal
@@ -279,7 +279,7 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
 # ---------------------------------------------------------------------------
 
 SKY_CAL = """\
-{ lbl_sky.cal: the sky luminance models of lbl_illum (lbl_illum/sky.py), written by
+{ lbl_sky.cal: the sky luminance models of lbl_illum (lbl_illum/daylight/sky.py), written by
   lbl-illum export radiance.  Used as  void brightfunc skyfunc 2 lbl_sky lbl_sky.cal 0 N A1 A2 ...
   on two glow hemispheres (sky above, ground below the horizon).
 
