@@ -19,6 +19,7 @@ from pathlib import Path
 from .._version import __version__
 from ..errors import InputError
 from ..optional import check as check_optional
+from .shared import run_options
 from .progress import ProgressBar
 from ..options import INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
@@ -320,26 +321,12 @@ def _check_run_files(args) -> None:
         raise InputError("--thresholds: give at least one value")
 
 
-def _run_options(scene, args):
-    """The scene's [settings], then the preset, then the options given on the command line."""
-    options = scene.options.with_preset(args.preset) if args.preset else scene.options
-    try:
-        return options.replace(
-            accuracy=args.accuracy, bounces=args.bounces, samples=args.samples, ambient=args.ambient,
-            min_spacing=args.min_spacing, max_spacing=args.max_spacing, seed=args.seed,
-            interpolation=args.interpolation, point_samples=args.point_samples,
-            bounce_scaling=False if args.no_bounce_scaling else None)
-    except InputError as exc:   # each value passed its own check: a combination (min > max spacing)
-        where = f"the command line with {Path(args.scene).name} [settings]:"
-        raise InputError(str(exc).replace("options:", where, 1)) from None
-
-
 def _compute(scene, args, points, normals):
     """Run the integrator with the options, cache file and progress bar of ``args``:
     (result, integrator, options)."""
     from ..engine.integrator import Integrator
 
-    options = _run_options(scene, args)
+    options = run_options(scene, args)
     if not args.quiet:
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)

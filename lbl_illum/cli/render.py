@@ -24,6 +24,7 @@ from ..errors import InputError, plural
 from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
 from .progress import ProgressBar as _Bar
+from .shared import run_options
 
 __all__ = ["add_render_arguments", "render_command", "resolve_view", "scene_views", "check_image_size",
            "MAX_IMAGE_SIDE"]
@@ -125,14 +126,7 @@ def _options_from_args(scene: Scene, args) -> Options:
     illuminance command), without ``point_samples``."""
     if _arg(args, "point_samples") is not None:
         raise InputError("--point-samples does not apply to images (every pixel would get its own evaluation)")
-    options = scene.options.with_preset(args.preset) if _arg(args, "preset") else scene.options
-    options = options.replace(
-        accuracy=_arg(args, "accuracy"), bounces=_arg(args, "bounces"), samples=_arg(args, "samples"),
-        ambient=_arg(args, "ambient"), min_spacing=_arg(args, "min_spacing"), max_spacing=_arg(args, "max_spacing"),
-        seed=_arg(args, "seed"), interpolation=_arg(args, "interpolation"),
-        bounce_scaling=False if _arg(args, "no_bounce_scaling") else None)
-    return image_options(options)
-
+    return image_options(run_options(scene, args))
 
 
 
