@@ -418,11 +418,6 @@ def render(scene, layers: list | None = None, points: np.ndarray | None = None,
         image = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
-    _write_png(screenshot, image)
-
-
-def _write_png(path: Path, image: np.ndarray) -> None:
-    """Write an (h, w, 3 or 4) uint8 image as PNG, atomically."""
     from ..io.images import write_png
 
-    write_png(path, np.ascontiguousarray(image), "lbl_illum 3-D view")
+    write_png(screenshot, np.ascontiguousarray(image), "lbl_illum 3-D view")
