@@ -58,6 +58,10 @@ DIRECT_SAMPLES = 4096
 #: images in flat mirrors, panes and polished plastic are direct light, its highlight on
 #: rough plastic is seen by the paths.
 SUN_IMAGES = "virtual suns in mirrors, panes and polished plastic; highlights on rough plastic"
+#: How the one-ray paths below the first reflection end (lbl_illum.engine.integrator.PATH_ROULETTE_LIMIT):
+#: Russian roulette once their throughput is below 0.1.  It changes the cost and the noise, not
+#: the expectation, so the seeds of references made before it (no "path_roulette" key) are kept.
+PATH_ROULETTE = "Russian roulette of paths below throughput 0.1"
 #: Sensors per engine call: pure Monte Carlo shares nothing between sensors, and every hit
 #: of every sensor's rays keeps a record until the call ends (the cabin's 40 sensors at
 #: once took more than 13 GB).
@@ -107,13 +111,15 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
     path = reference_path(scene, sky)
     doc = json.loads(path.read_text()) if path.is_file() else None
     method = {"point_samples": POINT_SAMPLES, "samples": HIT_SAMPLES, "bounces": BOUNCES,
-              "direct_samples": DIRECT_SAMPLES, "sun_images": SUN_IMAGES}
+              "direct_samples": DIRECT_SAMPLES, "sun_images": SUN_IMAGES, "path_roulette": PATH_ROULETTE}
     lbl = load_scene(files[sky])
     P, N = read_points(points_file, lbl.unit_scale)
     def paths(estimator):               # what the sun's handling does not change
-        return {k: v for k, v in estimator.items() if k not in ("direct_samples", "sun_images")}
+        return {k: v for k, v in estimator.items() if k not in ("direct_samples", "sun_images", "path_roulette")}
 
     old = {} if doc is None else doc.get("estimator", {})
+    if doc is not None and "path_roulette" not in old:
+        old = doc["estimator"] = {**old, "path_roulette": PATH_ROULETTE}     # the same expectation
     if doc is not None and paths(old) == paths(method) and (
             lbl.sun is None or (old.get("sun_images") == "virtual suns" and not specular_plastic(lbl))):
         # made before the direct light was split off or the sun's images were direct light

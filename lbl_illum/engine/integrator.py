@@ -73,6 +73,11 @@ __all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator",
 
 #: Specular (glass, mirror) interactions a hemisphere ray may follow.
 MAX_SPECULAR_DEPTH = 8
+#: Russian roulette of weak paths below the first reflection at accuracy 0: a path whose
+#: photometric throughput from its sensor (the product of ρ·(MIS weight) of its hits,
+#: :meth:`Integrator._path_roulette`) falls below this is continued with probability
+#: throughput / limit and then weighted up, so its expectation is unchanged.
+PATH_ROULETTE_LIMIT = 0.1
 #: Light-surface shadow rays per query point (hemisphere hits use one).
 QUERY_LIGHT_SAMPLES = 16
 #: Record spacing defaults: max = D / 2, min = max / 16, D the extent of the queries.
@@ -237,6 +242,7 @@ class _Pending:
     hit_weight: list = field(default_factory=list)  # throughput · ρ / π
     hit_owner: list = field(default_factory=list)   # index into the concatenated records
     hit_ray: list = field(default_factory=list)     # hemisphere ray of the hit, -1 for portal samples
+    hit_importance: list = field(default_factory=list)  # path throughput of hits feeding path levels
     # per hemisphere ray, kept for the irradiance gradients (levels that interpolate)
     ray_L: list = field(default_factory=list)       # (r·S, 3) radiance known at trace time, unweighted
     ray_mis: list = field(default_factory=list)     # (r·S,) MIS weight
@@ -531,10 +537,11 @@ class Integrator:
         return first_t, radiance, hits_out, mis_weight
 
     # -- placement (top-down) ---------------------------------------------------------
-    def _evaluate_hemispheres(self, k, P, Ns, Ng, pending: _Pending, rng):
+    def _evaluate_hemispheres(self, k, P, Ns, Ng, pending: _Pending, rng, importance=None):
         """Trace the hemispheres of new records at (P, Ns); return their radii R_i
         (clamped), the shapes W_i of elliptical domains and the leak sectors (both None
-        for round domains)."""
+        for round domains).  ``importance`` (r,) is each record's path throughput when
+        level k follows one-ray paths (:meth:`_path_roulette`)."""
         samples = self.options.level_samples(k)
         m, n = cell_counts(samples)
         S = m * n
@@ -586,6 +593,12 @@ class Integrator:
                 if pending.ray_L:   # the ambient value is part of each ray's radiance
                     np.add.at(pending.ray_L[-1], hemi_ray, hemi_weight * self.options.ambient)
         else:
+            if self._path_level(k + 1):
+                keep, hit_weight, child = self._path_roulette(
+                    importance if importance is not None else np.ones(r), owner_local, hit_weight, rng)
+                hits = {key: hits[key][keep] for key in ("P", "Ns", "Ng")}
+                owner_local, hit_ray = owner_local[keep], hit_ray[keep]
+                pending.hit_importance.append(child)
             base = sum(len(x) for x in pending.samples)      # records traced before these
             pending.hit_P.append(hits["P"])
             pending.hit_Ns.append(hits["Ns"].astype(np.float32))
@@ -601,6 +614,30 @@ class Integrator:
         if self.cache.levels[k].accuracy > 0 and self.gradient_limit:
             R0 = np.minimum(R0, self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n)[0])
         return self._clamp_radius(R0, P), None, None
+
+    def _path_level(self, k) -> bool:
+        """Level k follows one ray per record (accuracy 0 below the first reflection)."""
+        return (k <= self.options.bounces and self.cache.levels[k].accuracy == 0.0
+                and self.options.level_samples(k) == 1)
+
+    @staticmethod
+    def _path_roulette(importance, owner, weight, rng):
+        """Russian roulette (Arvo & Kirk 1990) of the hits that start one-ray paths.
+
+        A hit's path throughput is its record's ``importance`` (r,) times π·Y(w), w its
+        (m, 3) weight (throughput · ρ/π · MIS weight, what it adds to its record per unit
+        of irradiance, Eq. 2 without the 1/S of the record's samples).  Hits below
+        :data:`PATH_ROULETTE_LIMIT` go on with probability throughput / limit, weighted up
+        by its inverse.  Without it, a path trapped where every ray meets several plastic
+        surfaces with a specular part (each hit is both a diffuse hit and a continuation:
+        the inside of a closed brass doorknob) multiplies at every level.
+
+        Returns ``(keep (m,) bool, weight (k, 3), importance (k,))`` of the hits kept.
+        """
+        child = importance[owner] * np.pi * luminance(weight)
+        keep, scaled = russian_roulette(child[:, None] * np.ones((1, 3)), rng, PATH_ROULETTE_LIMIT)
+        factor = scaled[keep, 0] / child[keep]
+        return keep, weight[keep] * factor[:, None].astype(weight.dtype), child[keep] * factor
 
     def _light_limit(self, k, P, Ns, dirs, radiance, first_t, m, n):
         """R_i ≤ E/|∇_t E| (Ward & Heckbert 1992) for the light that makes a room's
@@ -872,18 +909,19 @@ class Integrator:
         hits = {key: np.concatenate([part[key] for part in parts]) for key in keys}
         return known, hits, np.concatenate(owners)
 
-    def _trace_records(self, k, P, Ns, Ng, pending: _Pending, key: int):
+    def _trace_records(self, k, P, Ns, Ng, pending: _Pending, key: int, importance=None):
         """:meth:`_evaluate_hemispheres` for new records of level k, in blocks of at most
         ``MAX_BATCH_RAYS`` rays; block b's random stream is keyed by ``key`` plus the
         index of its first record, so one block draws what the whole batch did."""
         per = max(1, MAX_BATCH_RAYS // max(1, self.options.level_samples(k)))
         if len(P) <= per:
-            return self._evaluate_hemispheres(k, P, Ns, Ng, pending, self._rng(_TAG_HEMISPHERE, k, key))
+            return self._evaluate_hemispheres(k, P, Ns, Ng, pending, self._rng(_TAG_HEMISPHERE, k, key), importance)
         parts = []
         for start in range(0, len(P), per):
             block = slice(start, start + per)
             rng = self._rng(_TAG_HEMISPHERE, k, key + start)
-            parts.append(self._evaluate_hemispheres(k, P[block], Ns[block], Ng[block], pending, rng))
+            parts.append(self._evaluate_hemispheres(k, P[block], Ns[block], Ng[block], pending, rng,
+                                                    None if importance is None else importance[block]))
             self._tick()
         return tuple(None if part[0] is None else np.concatenate(part) for part in zip(*parts))
 
@@ -893,11 +931,13 @@ class Integrator:
         far = np.linalg.norm(outside, axis=1)
         return np.clip(R0, self.min_spacing, self.max_spacing + far)
 
-    def place_level(self, k, P, Ns, Ng, stats: RunStats):
+    def place_level(self, k, P, Ns, Ng, stats: RunStats, importance=None):
         """Make the records of level k that the queries (P, Ns, Ng) need.
 
-        Returns ``(pending, own_record)``; ``own_record`` maps each query to its own
-        record when the level does not interpolate (accuracy 0), else it is None.
+        ``importance`` (n,): the queries' path throughput, when they start one-ray paths
+        (:meth:`_path_roulette`).  Returns ``(pending, own_record)``; ``own_record`` maps
+        each query to its own record when the level does not interpolate (accuracy 0),
+        else it is None.
         """
         lv = self.cache.levels[k]
         pending = _Pending()
@@ -908,7 +948,7 @@ class Integrator:
         Ns = np.asarray(Ns, np.float64)
         Ng = np.asarray(Ng, np.float64)
         if lv.accuracy == 0.0:
-            R, W, leak = self._trace_records(k, P, Ns, Ng, pending, lv.count)
+            R, W, leak = self._trace_records(k, P, Ns, Ng, pending, lv.count, importance)
             idx = lv.add(P, Ns, R, W=W, leak=leak)
             pending.records.append(idx)
             stats.new_records[k] += nq
@@ -1049,14 +1089,14 @@ class Integrator:
         self._open = {}
         return any(lv.count > start[k][0] and lv.accuracy > 0 for k, lv in enumerate(self.cache.levels))
 
-    def _solve_level(self, k, P, Ns, Ng, stats: RunStats):
+    def _solve_level(self, k, P, Ns, Ng, stats: RunStats, importance=None):
         """Make level k's records for the queries (P, Ns, Ng) and give them values.
 
         The queries are taken in blocks of ``QUERY_BLOCK``.  For each: place the records
         it needs (:meth:`place_level`), solve level k+1 for their hemisphere hits
         (recursively, depth first), then evaluate them from level k+1's records
         (:meth:`evaluate_level`).  Returns, for a level that does not interpolate, each
-        query's own record (else None).
+        query's own record (else None).  ``importance``: as in :meth:`place_level`.
         """
         B = self.options.bounces
         own_parts = []
@@ -1067,11 +1107,13 @@ class Integrator:
             self._open_block(k)
             where = f", block {b + 1} of {blocks}" if blocks > 1 else ""
             self._tick(f"placing level {k} ({len(P[part])} queries{where})")
-            pending, own = self.place_level(k, P[part], Ns[part], Ng[part], stats)
+            pending, own = self.place_level(k, P[part], Ns[part], Ng[part], stats,
+                                            None if importance is None else importance[part])
             own_parts.append(own)
             hP = pending.cat("hit_P")
             deeper = len(hP) > 0 and k + 1 <= B and self._level_active(k + 1)
-            own_next = self._solve_level(k + 1, hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), stats) \
+            child = pending.cat("hit_importance", width=0) if pending.hit_importance else None
+            own_next = self._solve_level(k + 1, hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), stats, child) \
                 if deeper else None
             self._tick(f"evaluating level {k}{where}")
             next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
