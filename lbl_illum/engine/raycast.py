@@ -36,7 +36,7 @@ from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
 from ..scene.geometry import orthonormal_basis
 from ..scene.materials import GLASS
 
-__all__ = ["Tracer", "Hits", "SELF_HIT_EPSILON", "thread_count", "step_past"]
+__all__ = ["Tracer", "RayCaster", "Hits", "SELF_HIT_EPSILON", "thread_count", "step_past"]
 
 #: Relative offset of ray origins off the surface they leave (see module docstring).
 SELF_HIT_EPSILON = 1e-5
@@ -116,57 +116,59 @@ class Hits:
         return self.prim >= 0
 
 
-def _embree_scene(vertices: np.ndarray):
-    if len(vertices) == 0:
-        return None
-    scene = rtcore_scene.EmbreeScene()
-    TriangleMesh(scene, np.ascontiguousarray(vertices, dtype=np.float32))
-    return scene
+def median_edge(vertices: np.ndarray) -> float:
+    """ℓ [m] of the self-hit offset: the median length of the triangles' first edges (1 m for none)."""
+    edges = np.linalg.norm(vertices[:, 1] - vertices[:, 0], axis=1)
+    return float(np.median(edges)) if len(edges) else 1.0
 
 
-class Tracer:
-    """Closest-hit and shadow queries against a scene's triangles.
+class RayCaster:
+    """Closest-hit and occlusion queries against (T, 3, 3) triangles [m]: the package's one
+    wrapper of Embree (the scene's :class:`Tracer` holds three, the workplane grids build
+    their own over parts of a scene).
 
-    Parameters
-    ----------
-    triangles : the scene's geometry [m]
-    material_kind : (m,) int8 material kind per material id (``materials.GLASS`` …)
-    transmittance : (m, 3) float64 glass transmittance per material id
-    threads : worker threads (default :func:`thread_count`)
+    Embree works in float32, so ``vertices`` are handed to it in float32; hit distances
+    come back in float64.  Large batches are split into chunks traced on a thread pool
+    (embreex releases the GIL).  ``rays_traced`` counts every ray.
     """
 
-    def __init__(self, triangles: Triangles, material_kind: np.ndarray, transmittance: np.ndarray,
-                 threads: int | None = None):
-        self.triangles = triangles
+    def __init__(self, vertices: np.ndarray, threads: int | None = None):
+        self.vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3, 3)
         self.threads = threads or thread_count()
         self.rays_traced = 0
-        verts = triangles.vertices
-        kind = np.asarray(material_kind)[triangles.material]
-        self._glass_ids = np.flatnonzero(kind == GLASS).astype(np.int32)
-        self._opaque_ids = np.flatnonzero(kind != GLASS).astype(np.int32)
-        self._all = _embree_scene(verts)
-        self._opaque = _embree_scene(verts[self._opaque_ids])
-        self._glass = _embree_scene(verts[self._glass_ids])
-        self._glass_tau = np.asarray(transmittance, dtype=np.float64)[triangles.material[self._glass_ids]]
-        self.normals = np.ascontiguousarray(triangles.normals, np.float64)
-        self._v0 = np.ascontiguousarray(verts[:, 0], np.float64)
-        self._has_spheres = bool(np.any(triangles.sphere >= 0))
-        edges = np.linalg.norm(verts[:, 1] - verts[:, 0], axis=1)
-        self.length_scale = float(np.median(edges)) if len(edges) else 1.0
+        self._scene = None
+        if len(self.vertices):
+            self._scene = rtcore_scene.EmbreeScene()
+            TriangleMesh(self._scene, np.ascontiguousarray(self.vertices, dtype=np.float32))
+        self.length_scale = median_edge(self.vertices)
 
-    # -- low level ----------------------------------------------------------
-    def _run(self, scene, origins, directions, tmax, occluded):
-        """Trace through ``scene`` in chunks on the thread pool."""
+    @property
+    def empty(self) -> bool:
+        return self._scene is None
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(T, 3) unit geometric normals, (v₁ − v₀) × (v₂ − v₀) normalised."""
+        if getattr(self, "_normals", None) is None:
+            v = self.vertices
+            n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+            self._normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        return self._normals
+
+    def _run(self, origins, directions, tmax, occluded):
+        """Trace (n, 3) rays in chunks on the thread pool; ``tmax`` (n,) or a number or None."""
         n = len(origins)
         self.rays_traced += n
         o = np.ascontiguousarray(origins, dtype=np.float32)
-        d = np.ascontiguousarray(directions, dtype=np.float32)
-        dist = None if tmax is None else np.ascontiguousarray(np.minimum(tmax, 3e38), dtype=np.float32)
+        d = np.ascontiguousarray(np.broadcast_to(directions, (n, 3)), dtype=np.float32)
+        dist = None if tmax is None else np.ascontiguousarray(
+            np.broadcast_to(np.minimum(tmax, 3e38), (n,)), dtype=np.float32)
         if occluded:
             out = np.empty(n, dtype=bool)
         else:
             t_out = np.empty(n, dtype=np.float64)
             p_out = np.empty(n, dtype=np.int32)
+        scene = self._scene
 
         def work(s):
             ds = None if dist is None else dist[s]
@@ -187,13 +189,63 @@ class Tracer:
             list(_pool(self.threads).map(work, slices))
         return out if occluded else (t_out, p_out)
 
+    def first_hit(self, origins: np.ndarray, directions: np.ndarray, tmax=None) -> tuple[np.ndarray, np.ndarray]:
+        """(t (n,) [m], ``inf`` for none; prim (n,) int32, -1 for none) of the closest hit of
+        rays with unit ``directions`` ((n, 3) or one (3,) for all), up to ``tmax``."""
+        n = len(origins)
+        if n == 0 or self._scene is None:
+            return np.full(n, np.inf), np.full(n, -1, np.int32)
+        return self._run(origins, directions, tmax, occluded=False)
+
+    def occluded(self, origins: np.ndarray, directions: np.ndarray, tmax=None) -> np.ndarray:
+        """(n,) bool: a triangle lies on the ray before ``tmax``."""
+        n = len(origins)
+        if n == 0 or self._scene is None:
+            return np.zeros(n, bool)
+        return self._run(origins, directions, tmax, occluded=True)
+
+    def epsilon(self, points: np.ndarray) -> np.ndarray:
+        """(n,) self-hit offset ε = ``SELF_HIT_EPSILON`` · (|P|∞ + ℓ) [m] (module docstring)."""
+        return SELF_HIT_EPSILON * (np.abs(np.asarray(points, np.float64)).max(axis=1) + self.length_scale)
+
+
+class Tracer:
+    """Closest-hit and shadow queries against a scene's triangles.
+
+    Parameters
+    ----------
+    triangles : the scene's geometry [m]
+    material_kind : (m,) int8 material kind per material id (``materials.GLASS`` …)
+    transmittance : (m, 3) float64 glass transmittance per material id
+    threads : worker threads (default :func:`thread_count`)
+    """
+
+    def __init__(self, triangles: Triangles, material_kind: np.ndarray, transmittance: np.ndarray,
+                 threads: int | None = None):
+        self.triangles = triangles
+        self.threads = threads or thread_count()
+        verts = triangles.vertices
+        kind = np.asarray(material_kind)[triangles.material]
+        self._glass_ids = np.flatnonzero(kind == GLASS).astype(np.int32)
+        self._opaque_ids = np.flatnonzero(kind != GLASS).astype(np.int32)
+        self._all = RayCaster(verts, self.threads)
+        self._opaque = RayCaster(verts[self._opaque_ids], self.threads)
+        self._glass = RayCaster(verts[self._glass_ids], self.threads)
+        self._glass_tau = np.asarray(transmittance, dtype=np.float64)[triangles.material[self._glass_ids]]
+        self.normals = np.ascontiguousarray(triangles.normals, np.float64)
+        self._v0 = np.ascontiguousarray(verts[:, 0], np.float64)
+        self._has_spheres = bool(np.any(triangles.sphere >= 0))
+        self.length_scale = self._all.length_scale
+
+    @property
+    def rays_traced(self) -> int:
+        """Rays traced so far, shadow rays and glass steps included."""
+        return self._all.rays_traced + self._opaque.rays_traced + self._glass.rays_traced
+
     # -- queries --------------------------------------------------------------
     def intersect(self, origins: np.ndarray, directions: np.ndarray) -> Hits:
         """Closest hit of (n, 3) rays with unit ``directions`` against every surface."""
-        if len(origins) == 0 or self._all is None:
-            return Hits(np.full(len(origins), np.inf), np.full(len(origins), -1, np.int32))
-        t, prim = self._run(self._all, origins, directions, None, occluded=False)
-        return Hits(t, prim)
+        return Hits(*self._all.first_hit(origins, directions))
 
     def transmittance(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray | None = None) -> np.ndarray:
         """(n, 3) fraction of light passing along each segment: 0 if an opaque surface
@@ -204,10 +256,9 @@ class Tracer:
             return result
         if tmax is None:
             tmax = np.full(n, np.inf)
-        if self._opaque is not None:
-            blocked = self._run(self._opaque, origins, directions, tmax, occluded=True)
-            result[blocked] = 0.0
-        if self._glass is None:
+        if not self._opaque.empty:
+            result[self._opaque.occluded(origins, directions, tmax)] = 0.0
+        if self._glass.empty:
             return result
         live = np.flatnonzero(result[:, 0] > 0)
         o = np.asarray(origins, dtype=np.float64)[live]
@@ -216,7 +267,7 @@ class Tracer:
         for _ in range(MAX_GLASS_LAYERS):
             if len(live) == 0:
                 break
-            t, prim = self._run(self._glass, o, d, tm, occluded=False)
+            t, prim = self._glass.first_hit(o, d, tm)
             crossed = prim >= 0
             live, o, d, tm, t, prim = live[crossed], o[crossed], d[crossed], tm[crossed], t[crossed], prim[crossed]
             result[live] *= self._glass_tau[prim]
@@ -268,7 +319,7 @@ class Tracer:
         """
         points = np.asarray(points, dtype=np.float64)
         normals = np.asarray(normals, dtype=np.float64)
-        eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        eps = self._all.epsilon(points)
         for c, r in zip(self.triangles.sphere_center, self.triangles.sphere_radius):
             radial = points - c
             dist = np.linalg.norm(radial, axis=1)
@@ -309,9 +360,9 @@ class Tracer:
         points = np.asarray(points, dtype=np.float64)
         normals = np.asarray(normals, dtype=np.float64)
         origins = self.offset(points, normals)
-        if len(points) == 0 or self._all is None:
+        if len(points) == 0 or self._all.empty:
             return origins
-        eps = SELF_HIT_EPSILON * (np.abs(points).max(axis=1) + self.length_scale)
+        eps = self._all.epsilon(points)
         zero = ON_SURFACE_FRACTION * eps
         # 1. a surface just in front
         hits = self.intersect(points, normals)

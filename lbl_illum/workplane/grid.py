@@ -88,6 +88,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..scene.materials import GLASS, LIGHT
+from ..engine.raycast import RayCaster
 
 __all__ = [
     "Grid", "AreaLattice", "workplane_grid", "en12464_spacing", "cell_layout", "section_segments",
@@ -221,49 +222,6 @@ class Grid:
         return list(dict.fromkeys(self.areas.tolist()))
 
 
-# ---------------------------------------------------------------------------
-# Ray casting against a set of triangles (Embree through embreex)
-# ---------------------------------------------------------------------------
-
-class _Caster:
-    """Closest-hit queries against (T, 3, 3) triangles [m], in float32 as Embree works.
-
-    t : (n,) distance to the first hit (``inf`` for none); prim : (n,) triangle or -1.
-    """
-
-    def __init__(self, vertices: np.ndarray):
-        from embreex import rtcore_scene
-        from embreex.mesh_construction import TriangleMesh
-
-        self.vertices = np.asarray(vertices, dtype=np.float64)
-        self.scene = None
-        if len(self.vertices):
-            self.scene = rtcore_scene.EmbreeScene()
-            TriangleMesh(self.scene, np.ascontiguousarray(self.vertices, dtype=np.float32))
-        n = np.cross(self.vertices[:, 1] - self.vertices[:, 0], self.vertices[:, 2] - self.vertices[:, 0])
-        self.normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-
-    def first_hit(self, origins: np.ndarray, directions: np.ndarray,
-                  tmax: float | np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        n = len(origins)
-        if n == 0 or self.scene is None:
-            return np.full(n, np.inf), np.full(n, -1, np.int64)
-        o = np.ascontiguousarray(origins, dtype=np.float32)
-        d = np.ascontiguousarray(np.broadcast_to(directions, (n, 3)), dtype=np.float32)
-        dists = None
-        if tmax is not None:
-            dists = np.ascontiguousarray(np.broadcast_to(np.minimum(tmax, 3e38), (n,)), dtype=np.float32)
-        res = self.scene.run(o, d, dists=dists, output=1)
-        prim = np.asarray(res["primID"], dtype=np.int64)
-        t = np.where(prim >= 0, np.asarray(res["tfar"], dtype=np.float64), np.inf)
-        return t, prim
-
-
-def _epsilon(points: np.ndarray) -> np.ndarray:
-    """Offset [m] of a ray origin off a surface: 1e-4 · (|P|∞ + 1 m), well above float32 round-off."""
-    return 1e-4 * (np.abs(points).max(axis=1) + 1.0)
-
-
 def fibonacci_hemisphere(n: int) -> np.ndarray:
     """(n, 3) unit directions spread evenly in solid angle over the upper hemisphere (z > 0).
 
@@ -361,7 +319,7 @@ def _touching_edges(vertices: np.ndarray):
     return np.concatenate(pairs).astype(np.int64), np.concatenate(segments)
 
 
-def _pieces(vertices: np.ndarray, caster: "_Caster", lift: float) -> np.ndarray:
+def _pieces(vertices: np.ndarray, caster: "RayCaster", lift: float) -> np.ndarray:
     """(T,) label of the piece of each triangle: triangles joined along an edge (or part
     of one) that no wall stands on.
 
@@ -505,36 +463,36 @@ def _triangle_samples(vertices: np.ndarray) -> np.ndarray:
     return np.einsum("sk,tkc->tsc", w, vertices)
 
 
-def _clear(caster: _Caster, surface_points: np.ndarray, height: float) -> np.ndarray:
+def _clear(caster: RayCaster, surface_points: np.ndarray, height: float) -> np.ndarray:
     """Nothing within max(``CLEARANCE_FRACTION`` · height, ``MIN_CLEARANCE``) above the points
     (rule 5); ``caster`` holds the scene less the surfaces of the points' own level."""
     reach = max(CLEARANCE_FRACTION * height, MIN_CLEARANCE)
     if len(surface_points) == 0:
         return np.ones(len(surface_points), bool)
-    eps = _epsilon(surface_points)
+    eps = caster.epsilon(surface_points)
     origins = surface_points + eps[:, None] * np.array([0.0, 0.0, 1.0])
     t, _ = caster.first_hit(origins, np.array([0.0, 0.0, 1.0]), reach)
     return ~np.isfinite(t)
 
 
-def _usable_triangles(caster: _Caster, others: _Caster, vertices: np.ndarray, height: float) -> np.ndarray:
+def _usable_triangles(caster: RayCaster, others: RayCaster, vertices: np.ndarray, height: float) -> np.ndarray:
     """(T,) indoor and clear (see the module docstring), by ``TRIANGLE_SAMPLES`` points each;
     ``others`` holds the scene less the triangles of this level (a rug does not hide the floor)."""
     samples = _triangle_samples(vertices).reshape(-1, 3)
     lifted = samples + np.array([0.0, 0.0, max(height, PROBE_LIFT)])
     dirs = fibonacci_hemisphere(SKY_PROBES)
-    origins = np.repeat(lifted + _epsilon(lifted)[:, None] * np.array([0.0, 0.0, 1.0]), SKY_PROBES, axis=0)
+    origins = np.repeat(lifted + caster.epsilon(lifted)[:, None] * np.array([0.0, 0.0, 1.0]), SKY_PROBES, axis=0)
     t, _ = caster.first_hit(origins, np.tile(dirs, (len(lifted), 1)))
     covered = np.isfinite(t).reshape(-1, SKY_PROBES).mean(axis=1) >= COVERED_FRACTION
     ok = covered & _clear(others, samples, height)
     return ok.reshape(-1, TRIANGLE_SAMPLES).mean(axis=1) >= 0.5
 
 
-def _without(vertices: np.ndarray, ids: np.ndarray) -> _Caster:
+def _without(vertices: np.ndarray, ids: np.ndarray) -> RayCaster:
     """A caster of every triangle but ``ids``."""
     keep = np.ones(len(vertices), bool)
     keep[ids] = False
-    return _Caster(vertices[keep])
+    return RayCaster(vertices[keep])
 
 
 def _material_ids(scene, names: list[str]) -> list[int]:
@@ -606,7 +564,7 @@ def workplane_grid(scene, height: float = 0.8, spacing: float | None = None, mar
     if surfaces is not None and len(set(surfaces)) != len(surfaces):
         raise InputError("--surface: a material is named twice")
     tri = scene.triangles
-    caster = _Caster(tri.vertices)
+    caster = RayCaster(tri.vertices)
     areas, warnings = _select_areas(scene, surfaces, height, caster)
 
     pts, names, lattices = [], [], []
@@ -615,7 +573,7 @@ def workplane_grid(scene, height: float = 0.8, spacing: float | None = None, mar
         found = 0
         for level in _levels(z):
             level_ids = ids[level]
-            area_caster = _Caster(tri.vertices[level_ids])
+            area_caster = RayCaster(tri.vertices[level_ids])
             others = _without(tri.vertices, level_ids)
             labels = _pieces(tri.vertices[level_ids], caster, max(height, PROBE_LIFT))
             area = np.bincount(labels, weights=tri.areas[level_ids])
@@ -623,7 +581,7 @@ def workplane_grid(scene, height: float = 0.8, spacing: float | None = None, mar
             for c in np.argsort(-area, kind="stable"):
                 piece = level_ids[labels == c]
                 p, lat = _piece_points(name, tri.vertices[piece], area_caster, caster, others, height, spacing,
-                                       margin, align, _Caster(tri.vertices[np.concatenate(taken)]) if taken else None)
+                                       margin, align, RayCaster(tri.vertices[np.concatenate(taken)]) if taken else None)
                 if lat is None:
                     continue
                 if lat.points:
@@ -683,7 +641,7 @@ def _piece_points(name, vertices, area_caster, caster, others, height, spacing, 
 
     # 1. over the piece, and the margin disk over the area
     top = float(vertices[:, :, 2].max()) + 1.0
-    piece_caster = _Caster(vertices)
+    piece_caster = RayCaster(vertices)
     origins = np.column_stack([plan, np.full(len(plan), top)])
     t, prim = piece_caster.first_hit(origins, np.array([0.0, 0.0, -1.0]))
     z_surface = np.where(np.isfinite(t), _plane_z(vertices, np.maximum(prim, 0), plan), np.nan)

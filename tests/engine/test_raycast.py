@@ -6,7 +6,7 @@ import pytest
 from lbl_illum.scene.geometry import Triangles, box_triangles
 from lbl_illum.engine.hemisphere import stratified_directions
 from lbl_illum.scene.materials import DIFFUSE, GLASS
-from lbl_illum.engine.raycast import Tracer
+from lbl_illum.engine.raycast import RayCaster, Tracer
 
 KINDS = np.array([DIFFUSE, GLASS], np.int8)
 TAU = np.array([[0, 0, 0], [0.7, 0.7, 0.7]], float)
@@ -131,3 +131,25 @@ def test_rays_leaving_the_inside_of_a_sphere_reach_its_far_side():
     # leaving outwards keeps the plain offset
     eps = 1e-5 * (np.abs(points).max(axis=1) + tracer.length_scale)
     assert np.allclose(np.linalg.norm(tracer.offset(points, u) - points, axis=1), eps)
+
+
+def test_ray_caster_first_hit_occlusion_and_counts_against_closed_form_distances():
+    """A unit square at z = 2: rays from the origin hit it at t = 2 / cos θ, miss it outside
+    its edges, are occluded only when tmax reaches it; an empty caster hits nothing."""
+    verts = np.array([[[-1, -1, 2], [1, -1, 2], [1, 1, 2]], [[-1, -1, 2], [1, 1, 2], [-1, 1, 2]]], float)
+    caster = RayCaster(verts)
+    d = np.array([[0, 0, 1.0], [0.3, 0.2, 1.0], [1.0, 0, 1.0], [0, 0, -1.0]])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = np.zeros((4, 3))
+    t, prim = caster.first_hit(o, d)
+    np.testing.assert_allclose(t[:2], 2.0 / d[:2, 2], rtol=1e-6)
+    assert np.all(prim[:2] >= 0) and np.all(np.isinf(t[2:])) and np.all(prim[2:] == -1)
+    assert caster.occluded(o[:2], d[:2], 10.0).all()
+    assert not caster.occluded(o[:2], d[:2], 1.9).any()
+    assert caster.rays_traced == 8
+    np.testing.assert_allclose(caster.normals, [[0, 0, 1.0], [0, 0, 1.0]])
+    # ε = SELF_HIT_EPSILON · (|P|∞ + ℓ), ℓ the median first edge (of 2 m and 2√2 m)
+    np.testing.assert_allclose(caster.epsilon(np.array([[3.0, -5.0, 1.0]])), [1e-5 * (5.0 + 1.0 + 2 ** 0.5)])
+    empty = RayCaster(np.zeros((0, 3, 3)))
+    t, prim = empty.first_hit(o, d)
+    assert empty.empty and np.all(np.isinf(t)) and np.all(prim == -1) and not empty.occluded(o, d).any()
