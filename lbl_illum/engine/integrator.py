@@ -227,6 +227,29 @@ def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
 
 
 @dataclass
+class _Queries:
+    """A level's queries: (n, 3) points [m], shading and geometric normals, and what only
+    some levels carry: the sensors' ray origins at level 0 (:meth:`Tracer.sensor_origins`,
+    found once for the hemispheres and the direct light) and the path throughput on
+    the one-ray paths of accuracy 0 (:meth:`Integrator._path_roulette`)."""
+
+    P: np.ndarray
+    Ns: np.ndarray
+    Ng: np.ndarray
+    origins: np.ndarray | None = None
+    importance: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.P)
+
+    def take(self, index) -> "_Queries":
+        """The queries ``index`` (a slice or an index array)."""
+        def part(a):
+            return None if a is None else a[index]
+        return _Queries(self.P[index], self.Ns[index], self.Ng[index], part(self.origins), part(self.importance))
+
+
+@dataclass
 class _Pending:
     """Records of one level made in this run and waiting for their values."""
 
@@ -537,18 +560,21 @@ class Integrator:
         return first_t, radiance, hits_out, mis_weight
 
     # -- placement (top-down) ---------------------------------------------------------
-    def _evaluate_hemispheres(self, k, P, Ns, Ng, pending: _Pending, rng, importance=None):
-        """Trace the hemispheres of new records at (P, Ns); return their radii R_i
-        (clamped), the shapes W_i of elliptical domains and the leak sectors (both None
-        for round domains).  ``importance`` (r,) is each record's path throughput when
-        level k follows one-ray paths (:meth:`_path_roulette`)."""
+    def _evaluate_hemispheres(self, k, q: _Queries, pending: _Pending, rng):
+        """Trace the hemispheres of new records at the queries ``q``; return their radii
+        R_i (clamped), the shapes W_i of elliptical domains and the leak sectors (both None
+        for round domains)."""
+        P, Ns, Ng = q.P, q.Ns, q.Ng
         samples = self.options.level_samples(k)
         m, n = cell_counts(samples)
         S = m * n
         r = len(P)
         dirs = stratified_directions(Ns, m, n, rng).reshape(-1, 3)
         # level 0 holds the sensor points, which need not lie on a surface
-        base = self.tracer.sensor_origins(P, Ng) if k == 0 else self.tracer.offset(P, Ng)
+        if q.origins is not None:
+            base = q.origins
+        else:
+            base = self.tracer.sensor_origins(P, Ng) if k == 0 else self.tracer.offset(P, Ng)
         origins = np.repeat(base, S, axis=0)
         n_p = 0
         # portal samples add rays per record; on the one-ray paths of accuracy 0 below
@@ -595,7 +621,7 @@ class Integrator:
         else:
             if self._path_level(k + 1):
                 keep, hit_weight, child = self._path_roulette(
-                    importance if importance is not None else np.ones(r), owner_local, hit_weight, rng)
+                    q.importance if q.importance is not None else np.ones(r), owner_local, hit_weight, rng)
                 hits = {key: hits[key][keep] for key in ("P", "Ns", "Ng")}
                 owner_local, hit_ray = owner_local[keep], hit_ray[keep]
                 pending.hit_importance.append(child)
@@ -909,19 +935,18 @@ class Integrator:
         hits = {key: np.concatenate([part[key] for part in parts]) for key in keys}
         return known, hits, np.concatenate(owners)
 
-    def _trace_records(self, k, P, Ns, Ng, pending: _Pending, key: int, importance=None):
-        """:meth:`_evaluate_hemispheres` for new records of level k, in blocks of at most
-        ``MAX_BATCH_RAYS`` rays; block b's random stream is keyed by ``key`` plus the
-        index of its first record, so one block draws what the whole batch did."""
+    def _trace_records(self, k, q: _Queries, pending: _Pending, key: int):
+        """:meth:`_evaluate_hemispheres` for new records of level k at the queries ``q``, in
+        blocks of at most ``MAX_BATCH_RAYS`` rays; block b's random stream is keyed by
+        ``key`` plus the index of its first record, so one block draws what the whole batch did."""
         per = max(1, MAX_BATCH_RAYS // max(1, self.options.level_samples(k)))
-        if len(P) <= per:
-            return self._evaluate_hemispheres(k, P, Ns, Ng, pending, self._rng(_TAG_HEMISPHERE, k, key), importance)
+        if len(q) <= per:
+            return self._evaluate_hemispheres(k, q, pending, self._rng(_TAG_HEMISPHERE, k, key))
         parts = []
-        for start in range(0, len(P), per):
+        for start in range(0, len(q), per):
             block = slice(start, start + per)
             rng = self._rng(_TAG_HEMISPHERE, k, key + start)
-            parts.append(self._evaluate_hemispheres(k, P[block], Ns[block], Ng[block], pending, rng,
-                                                    None if importance is None else importance[block]))
+            parts.append(self._evaluate_hemispheres(k, q.take(block), pending, rng))
             self._tick()
         return tuple(None if part[0] is None else np.concatenate(part) for part in zip(*parts))
 
@@ -931,24 +956,22 @@ class Integrator:
         far = np.linalg.norm(outside, axis=1)
         return np.clip(R0, self.min_spacing, self.max_spacing + far)
 
-    def place_level(self, k, P, Ns, Ng, stats: RunStats, importance=None):
-        """Make the records of level k that the queries (P, Ns, Ng) need.
+    def place_level(self, k, q: _Queries, stats: RunStats):
+        """Make the records of level k that the queries ``q`` need.
 
-        ``importance`` (n,): the queries' path throughput, when they start one-ray paths
-        (:meth:`_path_roulette`).  Returns ``(pending, own_record)``; ``own_record`` maps
-        each query to its own record when the level does not interpolate (accuracy 0),
-        else it is None.
+        Returns ``(pending, own_record)``; ``own_record`` maps each query to its own
+        record when the level does not interpolate (accuracy 0), else it is None.
         """
         lv = self.cache.levels[k]
         pending = _Pending()
-        nq = len(P)
+        nq = len(q)
         stats.queries[k] += nq
         if nq == 0:
             return pending, None
-        Ns = np.asarray(Ns, np.float64)
-        Ng = np.asarray(Ng, np.float64)
+        q = _Queries(q.P, np.asarray(q.Ns, np.float64), np.asarray(q.Ng, np.float64), q.origins, q.importance)
+        P, Ns = q.P, q.Ns
         if lv.accuracy == 0.0:
-            R, W, leak = self._trace_records(k, P, Ns, Ng, pending, lv.count, importance)
+            R, W, leak = self._trace_records(k, q, pending, lv.count)
             idx = lv.add(P, Ns, R, W=W, leak=leak)
             pending.records.append(idx)
             stats.new_records[k] += nq
@@ -972,7 +995,7 @@ class Integrator:
             else:
                 local = pick_per_cell(tP, tN, band, cell)
             pP, pN = tP[local], tN[local]
-            R, W, leak = self._trace_records(k, pP, pN, Ng[todo[local]], pending, lv.count)
+            R, W, leak = self._trace_records(k, q.take(todo[local]), pending, lv.count)
             pZ = zone[todo[local]]
             pending.records.append(lv.add(pP, pN, R, W=W, leak=leak, zone=pZ))
             stats.new_records[k] += len(local)
@@ -1089,32 +1112,31 @@ class Integrator:
         self._open = {}
         return any(lv.count > start[k][0] and lv.accuracy > 0 for k, lv in enumerate(self.cache.levels))
 
-    def _solve_level(self, k, P, Ns, Ng, stats: RunStats, importance=None):
-        """Make level k's records for the queries (P, Ns, Ng) and give them values.
+    def _solve_level(self, k, q: _Queries, stats: RunStats):
+        """Make level k's records for the queries ``q`` and give them values.
 
         The queries are taken in blocks of ``QUERY_BLOCK``.  For each: place the records
         it needs (:meth:`place_level`), solve level k+1 for their hemisphere hits
         (recursively, depth first), then evaluate them from level k+1's records
         (:meth:`evaluate_level`).  Returns, for a level that does not interpolate, each
-        query's own record (else None).  ``importance``: as in :meth:`place_level`.
+        query's own record (else None).
         """
         B = self.options.bounces
         own_parts = []
-        n = len(P)
+        n = len(q)
         blocks = max(1, -(-n // QUERY_BLOCK))
         for b in range(blocks):
             part = slice(b * QUERY_BLOCK, (b + 1) * QUERY_BLOCK)
             self._open_block(k)
             where = f", block {b + 1} of {blocks}" if blocks > 1 else ""
-            self._tick(f"placing level {k} ({len(P[part])} queries{where})")
-            pending, own = self.place_level(k, P[part], Ns[part], Ng[part], stats,
-                                            None if importance is None else importance[part])
+            self._tick(f"placing level {k} ({len(q.P[part])} queries{where})")
+            pending, own = self.place_level(k, q.take(part), stats)
             own_parts.append(own)
             hP = pending.cat("hit_P")
             deeper = len(hP) > 0 and k + 1 <= B and self._level_active(k + 1)
             child = pending.cat("hit_importance", width=0) if pending.hit_importance else None
-            own_next = self._solve_level(k + 1, hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), stats, child) \
-                if deeper else None
+            hits = _Queries(hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), importance=child)
+            own_next = self._solve_level(k + 1, hits, stats) if deeper else None
             self._tick(f"evaluating level {k}{where}")
             next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
             self.evaluate_level(k, pending, next_answer)
@@ -1177,12 +1199,14 @@ class Integrator:
                 # placement top-down and evaluation bottom-up, block by block
                 own0 = None
                 solved = len(points) > 0 and self._level_active(0)
+                # the sensors' ray origins, found once for their direct light and their
+                # hemispheres (without direct light, level 0 finds those of its new records)
+                origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
                 if solved:
-                    own0 = self._solve_level(0, points, normals, normals, stats)
+                    own0 = self._solve_level(0, _Queries(points, normals, normals, origins), stats)
 
                 # answers at the query points
                 self._tick("direct light at the points")
-                origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
                 direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
                                                  light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
                 if solved:
