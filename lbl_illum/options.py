@@ -12,8 +12,9 @@ option                 default  meaning
 ``samples``            1024     hemisphere samples M·N of a primary evaluation (Eq. 2) at the
                                 first level of the cache
 ``ambient``            0        illuminance [lux] substituted at the bounce limit
-``min_spacing``        auto     lower clamp on each record's R_i [scene units]
-``max_spacing``        auto     upper clamp on each record's R_i [scene units]
+``min_spacing``        auto     lower clamp on each record's R_i [m] (in ``units`` in a scene
+                                file's ``[settings]`` and on the command line: converted there)
+``max_spacing``        auto     upper clamp on each record's R_i [m] (the same)
 ``bounce_scaling``     true     §3.4: each deeper level multiplies ``a`` by 1.4 (up to twice
                                 the first level's, and not by growth above 0.4) and halves
                                 the samples

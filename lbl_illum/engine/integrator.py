@@ -1181,9 +1181,8 @@ class Integrator:
         probe = (len(points) > 0 and self._level_active(0)
                  and not (self.options.min_spacing and self.options.max_spacing))
         auto_min, auto_max = self.default_spacing(points, normals) if probe else (1.0, 1.0)
-        scale = self.scene.unit_scale
-        self.max_spacing = self.options.max_spacing * scale if self.options.max_spacing else auto_max
-        self.min_spacing = self.options.min_spacing * scale if self.options.min_spacing else min(
+        self.max_spacing = self.options.max_spacing if self.options.max_spacing else auto_max
+        self.min_spacing = self.options.min_spacing if self.options.min_spacing else min(
             auto_min, self.max_spacing)
         self.min_spacing = min(self.min_spacing, self.max_spacing)
         stats.min_spacing, stats.max_spacing = self.min_spacing, self.max_spacing

@@ -417,9 +417,7 @@ def render(scene: Scene, view: View, width: int, height: int, options: Options |
         if saved.min_spacing is None and saved.max_spacing is None:
             spacing = view_spacing(hits["P"])
             if spacing is not None:
-                scale = integ.scene.unit_scale
-                integ.options = dataclasses.replace(saved, min_spacing=spacing[0] / scale,
-                                                    max_spacing=spacing[1] / scale)
+                integ.options = dataclasses.replace(saved, min_spacing=spacing[0], max_spacing=spacing[1])
         try:
             result = integ.compute(hits["P"], hits["N"])
         finally:

@@ -661,7 +661,7 @@ def _default_max_spacing(scene, points, normals) -> float | None:
     """Our record spacing limit [m]: the scene's ``max_spacing`` if set, else the
     integrator's automatic one for these points (None without points)."""
     if scene.options.max_spacing:
-        return scene.options.max_spacing * scene.unit_scale
+        return scene.options.max_spacing
     if points is None or len(points) == 0:
         return None
     from ..engine.integrator import default_spacing, spacing_rng

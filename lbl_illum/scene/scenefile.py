@@ -164,8 +164,7 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
 
     ``base_dir`` is where geometry files are looked up; ``where`` names the source in
     messages (normally the scene file's name).  Lengths are in ``data["units"]`` and
-    come out in metres; the ``[settings]`` spacings stay in scene units (the
-    integrator converts them with ``unit_scale``).
+    come out in metres, the ``[settings]`` spacings too.
     """
     if not isinstance(data, Mapping):
         raise InputError(f"{where}: a scene must be a table of keys, got {type(data).__name__}")
@@ -423,15 +422,20 @@ def _materials(table: Mapping[str, Any] | None, where: str, warnings: list[str])
 
 
 def _options(table: Mapping[str, Any] | None, where: str, scale: float) -> Options:
-    """``[settings]``.  Spacings stay in scene units, as on the command line; the
-    integrator converts them with ``Scene.unit_scale``.  ``bounces`` is at most
-    :data:`MAX_BOUNCES`."""
+    """``[settings]``.  Spacings are given in scene units and converted to metres (the
+    engine takes metres only).  ``bounces`` is at most :data:`MAX_BOUNCES`."""
     if table is not None and "preset" in table and not isinstance(table["preset"], str):
         raise InputError(f"{where}: 'preset' must be a name (a string), got {show(table['preset'])}")
     options = Options.from_table(table, where, base=scene_defaults())
     if options.bounces > MAX_BOUNCES:
         raise InputError(f"{where}: 'bounces' must be <= {MAX_BOUNCES}, got {options.bounces}")
-    return options
+    return in_metres(options, scale)
+
+
+def in_metres(options: Options, scale: float) -> Options:
+    """``options`` with spacings given in scene units (``scale`` metres each) in metres."""
+    return options.replace(**{key: getattr(options, key) * scale for key in ("min_spacing", "max_spacing")
+                              if getattr(options, key) is not None})
 
 
 # ---------------------------------------------------------------------------

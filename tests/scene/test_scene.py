@@ -112,9 +112,9 @@ def test_mm_and_m_give_the_same_metres(tmp_path):
     assert np.allclose(mm.triangles.vertices, m.triangles.vertices, rtol=1e-12, atol=1e-12)
     assert np.array_equal(mm.triangles.material, m.triangles.material)
     assert np.allclose(mm.triangles.sphere_radius, [0.5]) and np.allclose(mm.triangles.sphere_center, [[0, 0, 1]])
-    # spacings stay in scene units (as on the command line): the same metres once scaled
-    assert mm.options.min_spacing * mm.unit_scale == pytest.approx(m.options.min_spacing * m.unit_scale)
-    assert mm.options.max_spacing * mm.unit_scale == pytest.approx(2.0)
+    # spacings are given in scene units and come out in metres, as every length does
+    assert mm.options.min_spacing == pytest.approx(m.options.min_spacing) == pytest.approx(0.1)
+    assert mm.options.max_spacing == pytest.approx(2.0)
 
 
 def test_feet():
