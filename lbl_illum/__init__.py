@@ -11,10 +11,35 @@ The public surface::
 from ._version import __version__  # noqa: E402
 from .engine.cache import IrradianceCache  # noqa: E402
 from .errors import InputError  # noqa: E402
-from .engine.integrator import IlluminanceResult, Integrator, compute_illuminance  # noqa: E402
+from .engine.integrator import IlluminanceResult, Integrator  # noqa: E402
 from .options import Options  # noqa: E402
 from .scene.scenefile import Scene, load_scene  # noqa: E402
 from .io.points import read_points, write_results  # noqa: E402
 
 __all__ = ["__version__", "IrradianceCache", "InputError", "IlluminanceResult", "Integrator",
            "compute_illuminance", "Options", "Scene", "load_scene", "read_points", "write_results"]
+
+
+def compute_illuminance(scene: Scene, points, normals, options: Options | None = None,
+                        cache: IrradianceCache | None = None, progress=None, cache_file=None,
+                        rebuild_cache: bool = False) -> IlluminanceResult:
+    """Illuminance [lux] at sensor ``points`` [m] facing ``normals``: direct + indirect.
+
+    ``cache_file`` (a path) keeps the records in a file: read first, written at the end
+    and on interruption, merged with other processes' records
+    (:func:`lbl_illum.io.cachefile.attach_cache_file`; ``rebuild_cache`` replaces a file
+    made for other settings instead of refusing it).
+
+    Example
+    -------
+    >>> from lbl_illum import load_scene, compute_illuminance, read_points
+    >>> scene = load_scene("examples/office/scene.toml")          # doctest: +SKIP
+    >>> pts, nrm = read_points("examples/office/grid.pts", scene.unit_scale)  # doctest: +SKIP
+    >>> compute_illuminance(scene, pts, nrm).illuminance.mean()   # doctest: +SKIP
+    """
+    integ = Integrator(scene, options, cache, progress)
+    if cache_file is not None:
+        from .io.cachefile import attach_cache_file
+
+        attach_cache_file(integ, cache_file, rebuild=rebuild_cache)
+    return integ.compute(points, normals)

@@ -338,7 +338,8 @@ def _compute(scene, args, points, normals):
     integ.progress = bar
     try:
         if args.cache:
-            integ.attach_cache_file(args.cache, rebuild=args.rebuild_cache)
+            from ..io.cachefile import attach_cache_file
+            attach_cache_file(integ, args.cache, rebuild=args.rebuild_cache)
         result = integ.compute(points, normals)       # writes the cache file too
     finally:
         bar.close()

@@ -235,7 +235,8 @@ def render_command(args, progress=None) -> int:
         cache_file = _arg(args, "cache")
         if cache_file:
             try:
-                integ.attach_cache_file(cache_file, rebuild=bool(_arg(args, "rebuild_cache")))
+                from ..io.cachefile import attach_cache_file
+                attach_cache_file(integ, cache_file, rebuild=bool(_arg(args, "rebuild_cache")))
             except InputError as exc:
                 if "other settings" in str(exc):
                     raise InputError(f"{exc}; images do not use point_samples, so a cache made with them "

@@ -46,8 +46,6 @@ limit tied to the scene's bounding box makes records as large as rooms).
 from __future__ import annotations
 
 import contextlib
-import hashlib
-import json
 import time
 from dataclasses import dataclass, field
 
@@ -55,24 +53,22 @@ import numpy as np
 from numba import njit
 
 from .cache import IrradianceCache, LevelRecords
-from .direct import DirectLight
+from .context import LightingContext
+from .fingerprint import record_settings, scene_fingerprint
 from .hemisphere import (MAX_ANISOTROPY, cell_counts, cosine_directions, hessian_radii, irradiance_gradients,
                          irradiance_hessian, leak_sectors, limit_gradients, orthonormal_basis, stratified_directions)
 from .lambert import portal_irradiance
-from ..scene.materials import GLASS, LIGHT, MIRROR, PLASTIC, PLASTIC_BRANCH_LIMIT, MaterialTable, russian_roulette
+from ..scene.materials import russian_roulette
 from ..options import Options
 from .placement import distance_bands, pick_per_cell
 from ..photometry import luminance
-from .portals import build_portals
-from ..scene.geometry import TriangleSampler, Triangles
+from .paths import HEMISPHERE, MAX_SPECULAR_DEPTH, follow_paths
 from .raycast import Hits, Tracer, step_past
 from ..scene.scenefile import Scene
 
-__all__ = ["IlluminanceResult", "RunStats", "compute_illuminance", "Integrator", "scene_fingerprint",
+__all__ = ["IlluminanceResult", "RunPlan", "RunStats", "Integrator", "scene_fingerprint",
            "default_spacing", "spacing_rng"]
 
-#: Specular (glass, mirror) interactions a hemisphere ray may follow.
-MAX_SPECULAR_DEPTH = 8
 #: Russian roulette of weak paths below the first reflection at accuracy 0: a path whose
 #: photometric throughput from its sensor (the product of ρ·(MIS weight) of its hits,
 #: :meth:`Integrator._path_roulette`) falls below this is continued with probability
@@ -187,45 +183,6 @@ class IlluminanceResult:
         return luminance(self.rgb)
 
 
-#: Version of the rules that make records' values and sizes (part of the fingerprint: a
-#: cache file made with other rules is refused).  3: light limits from the portals in
-#: closed form inside, zones (docs/architecture.md, "Record domains"); 4: the sun's images
-#: in mirrors and panes are direct light (lbl_illum.engine.sunmirrors); 5: and in polished plastic,
-#: with the sun's highlight on rough plastic seen by hemisphere rays.
-SIZING_VERSION = 5
-
-
-def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
-    """Hash of everything the records depend on (not the seed, spacing or query points):
-    the geometry, the materials, the daylight, the options that change records, the rule
-    that sizes them (:data:`SIZING_VERSION`) and the ``portals`` (a
-    :class:`~lbl_illum.engine.portals.PortalSet`), whose zones decide which records serve which
-    queries."""
-    h = hashlib.sha256()
-    tri = scene.triangles
-    for arr in (tri.vertices, tri.material, tri.sphere, tri.sphere_center, tri.sphere_radius):
-        h.update(np.ascontiguousarray(arr).tobytes())
-    if portals is not None:
-        for arr in (portals.sampler.vertices, portals.outward, portals.enclosure):
-            if arr is not None:
-                h.update(np.ascontiguousarray(arr, np.float64).tobytes())
-    desc = {
-        "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance, m.model, m.panes, m.index)
-                      + ((m.specularity, m.roughness) if m.kind == "plastic" else ())
-                      for m in scene.materials],
-        "sky": scene.sky.parameters,
-        "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,
-                                               scene.sun.direct_normal_illuminance),
-        "options": (options.ambient, [options.level_accuracy(k) for k in range(options.bounces + 1)],
-                    [options.level_samples(k) for k in range(options.bounces + 1)]),
-    }
-    desc["sizing"] = SIZING_VERSION
-    if options.interpolation == "hessian":      # other record radii
-        desc["domains"] = "hessian"
-    h.update(json.dumps(desc, sort_keys=True).encode())
-    return h.hexdigest()
-
-
 @dataclass
 class _Queries:
     """A level's queries: (n, 3) points [m], shading and geometric normals, and what only
@@ -282,6 +239,44 @@ class _Pending:
         return getattr(self, name)[0]
 
 
+@dataclass
+class RunPlan:
+    """What one :meth:`Integrator.compute` hands its stages, and nothing keeps after it.
+
+    The integrator holds what is fixed for a scene and a set of options (its lighting
+    context, options, cache); what depends on a run's query points is here: the record
+    spacing limits (found from the points unless the options or the caller give them),
+    the box around the points, the portals' luminance seen from it and the split-flux
+    estimate of the interreflected light inside, the open query block of each level (for
+    interruptions) and the run's statistics.
+    """
+
+    bounces: int
+    min_spacing: float                    #: lower clamp on R_i [m]
+    max_spacing: float                    #: upper clamp on R_i [m] (near the queries)
+    roi: tuple                            #: (lo, hi) [m], the box around the query points
+    portal_luminance: np.ndarray | None   #: per portal triangle [cd/m²] (LightingContext.portal_luminance)
+    inside: tuple                         #: (Φρ/A [lux], ρ) of the inside (LightingContext.inside_stats)
+    stats: RunStats
+    rays_reported: int = 0                #: rays already reported to the progress display
+    open_blocks: dict = field(default_factory=dict)   #: level → its state when its open block began
+
+    def interreflected(self, k: int) -> float:
+        """Estimate [lux] of the interreflected light in the value of a level-k record
+        inside: the split-flux average (Sumpner's law of the integrating sphere) over the
+        B − k bounces still to come, E = Φ ρ / A · (1 − ρ^(B−k)) / (1 − ρ), with Φ the
+        flux through the portals, A the area and ρ the mean diffuse reflectance of the
+        surfaces inside (:meth:`LightingContext.inside_stats`).  The interreflected light
+        varies little over a record's domain; counting it in E keeps a window's gradient
+        from shrinking the domains deep in a room, where most of the light is
+        interreflected."""
+        n = self.bounces - k
+        first, rho = self.inside
+        if n <= 0 or rho <= 0:
+            return 0.0
+        return first * (1.0 - rho ** n) / (1.0 - rho) if rho < 1.0 else first * n
+
+
 def spacing_rng(seed: int) -> np.random.Generator:
     """The random stream of :func:`default_spacing` for a run of ``seed``."""
     return np.random.default_rng(np.random.SeedSequence([seed, _TAG_PROBE]))
@@ -310,6 +305,38 @@ def default_spacing(tracer: Tracer, points, normals, rng: np.random.Generator) -
     return max_spacing / SPACING_RATIO, max_spacing
 
 
+class _PortalWeights:
+    """The balance-heuristic weights of hemisphere rays drawn beside portal samples
+    (:meth:`Integrator.trace_paths`, the hook of :func:`lbl_illum.engine.paths.follow_paths`):
+    the openings a ray crosses before its first hit, plus the portal glass it goes
+    through if its first hit is one and it is transmitted there."""
+
+    def __init__(self, integ: "Integrator", n: int, normals, S, n_p):
+        self.integ, self.normals, self.S = integ, normals, S
+        self.n_p = np.broadcast_to(np.asarray(n_p, np.float64), (n,))     # per ray (0: draws none)
+        self.weight = np.ones(n)
+        self.reach = None               # samples on openings: unobstructed up to them
+        self.p_open = None
+
+    def first_hit(self, ray, origins, directions, hits):
+        keep = None
+        if self.reach is not None:
+            keep = hits.t > self.reach
+            self.weight[~keep] = 0.0
+            ray, origins, directions = ray[keep], origins[keep], directions[keep]
+            hits = Hits(hits.t[keep], hits.prim[keep])
+        self.p_open = self.integ._portal_density(directions, hits.t, origins=origins)
+        self.weight[ray] = self.integ._hemisphere_weight(self.normals[ray], directions, self.p_open, self.S,
+                                                         self.n_p[ray])
+        return keep
+
+    def through_portal(self, ray, directions, hits, rows):
+        d = directions[rows]
+        density = self.p_open[rows] + self.integ._portal_density(d, hits.t[rows], prim=hits.prim[rows])
+        r = ray[rows]
+        self.weight[r] = self.integ._hemisphere_weight(self.normals[r], d, density, self.S, self.n_p[r])
+
+
 class Integrator:
     """Computes illuminance for one scene and one set of options, with a cache.
 
@@ -318,102 +345,57 @@ class Integrator:
     """
 
     def __init__(self, scene: Scene, options: Options | None = None, cache: IrradianceCache | None = None,
-                 progress=None):
-        self.scene = scene
+                 progress=None, context: LightingContext | None = None):
+        if context is not None and context.scene is not scene:
+            raise ValueError("the lighting context was made for another scene")
+        #: the scene's tracer, materials, light sources and portals (shared, never changed)
+        self.context = context if context is not None else LightingContext.of(scene)
         self.options = options or scene.options
-        self.materials: MaterialTable = scene.material_table
-        self.tracer = Tracer(scene.triangles, self.materials.kind, self.materials.transmittance)
-        self.direct = DirectLight(self.tracer, self.materials, scene.sun)
-        self.sky = scene.sky
-        self.sun = self.direct.sun
         #: limit each R_i by E/|∇_t E| of its known light (off only for comparisons)
         self.gradient_limit = True
-        # window portals (§5; lbl_illum.engine.portals): portal glass first, then openings, which no
-        # other ray sees (their own tracer finds the openings a ray crosses, for the MIS weights)
-        self.portal_set = None if scene.sky.is_dark else build_portals(scene, self.tracer, self.materials,
-                                                                       find=scene.find_openings)
-        ps = self.portal_set
-        self.portals = ps.sampler if ps is not None else None
-        #: per portal triangle: its scene triangle (portal glass), or -1 (an opening)
-        self._portal_prim = ps.prim if ps is not None else np.zeros(0, np.int64)
-        portal_ids = self._portal_prim[self._portal_prim >= 0]
-        self._portal_index = np.full(len(scene.triangles), -1, np.int64)
-        self._portal_index[portal_ids] = np.arange(len(portal_ids))
-        openings = self.portals.vertices[len(portal_ids):] if ps is not None else np.zeros((0, 3, 3))
-        self._openings = None
-        if len(openings):
-            self._openings = Tracer(Triangles(openings, np.zeros(len(openings), np.int32),
-                                              np.full(len(openings), -1, np.int32)),
-                                    np.zeros(1, np.int8), np.zeros((1, 3)), threads=self.tracer.threads)
-            self._opening_first = len(portal_ids)     # portal index of the first opening triangle
-        #: per material: reflects diffusely (ends a path at a diffuse level: a diffuse
-        #: surface or the diffuse part of plastic), and ρ_d/π
-        self._diffuse_reflector = self.materials.diffuse_reflectance.max(axis=1) > 0.0
-        self._rho_over_pi = self.materials.diffuse_reflectance / np.pi
-        used = np.unique(scene.triangles.material)
-        specular = np.isin(self.materials.kind[used], (MIRROR, GLASS)) & (self.materials.reflectance[used].max(axis=1) > 0)
-        specular |= self.materials.specularity[used] > 0.0
-        #: some surface reflects specularly (a mirror, glass with reflectance, plastic with s > 0)
-        self._reflects = bool(specular.any())
-        #: some plastic is hit: its specular branches play Russian roulette
-        self._plastic = bool(np.any(self.materials.kind[used] == PLASTIC))
-        #: a sun and some rough plastic: paths meeting it see the sun's highlight
-        self._sun_glossy = self.direct.sun is not None and bool(np.any(self.materials.glossy[used]))
-        #: some polished plastic's diffuse reflectance depends on the angle of incidence
-        self._plastic_fresnel = bool(np.any(self.materials.plastic_fresnel[used]))
         #: elliptical record domains from the Hessian (``interpolation = "hessian"``)
         self.hessian = self.options.interpolation == "hessian"
-        self.fingerprint = scene_fingerprint(scene, self.options, self.portal_set)
+        self.fingerprint = scene_fingerprint(scene, self.options, self.context.portal_set)
         self.progress = progress
         B = self.options.bounces
         self.accuracies = [self.options.level_accuracy(k) for k in range(B + 1)]
         self.cache = cache
         if cache is not None and cache.fingerprint != self.fingerprint:
             raise ValueError("cache was made for another scene or other settings")
+        #: who keeps the records beyond the run (None: memory only).  A keeper has
+        #: ``guard()`` (a context around a run: how it may be stopped), ``hold()`` (a context
+        #: in which stopping waits), ``save(cache)`` (returns the records per level kept)
+        #: and ``name``; a cache file is one (:func:`lbl_illum.io.cachefile.attach_cache_file`).
+        self.keeper = None
 
-    def _zone(self, P) -> np.ndarray:
-        """(n,) uint8 cache zone of each point (:meth:`lbl_illum.engine.portals.PortalSet.zone`; 0 for
-        all without portals)."""
-        if self.portal_set is None:
-            return np.zeros(len(P), np.uint8)
-        return self.portal_set.zone(P)
+    # -- the lighting context, read-only ------------------------------------------------
+    scene = property(lambda self: self.context.scene, doc="The scene (lengths in metres).")
+    materials = property(lambda self: self.context.materials, doc="The scene's material table.")
+    tracer = property(lambda self: self.context.tracer, doc="The scene's ray tracer.")
+    direct = property(lambda self: self.context.direct, doc="The sun and light surfaces (direct light).")
+    sky = property(lambda self: self.context.sky, doc="The sky model.")
+    sun = property(lambda self: self.context.sun, doc="The sun (None without one).")
+    portal_set = property(lambda self: self.context.portal_set, doc="Window portals and openings (or None).")
+    portals = property(lambda self: self.context.portals, doc="The portal triangles' sampler (or None).")
 
     def portal_notes(self) -> list[str]:
-        """What the user should hear of the portals: openings found in the geometry and
-        panes left out because no sky lies behind them (:mod:`lbl_illum.engine.portals`)."""
-        ps = self.portal_set
-        if ps is None:
-            return self.direct.notes()
-        notes = [f"unglazed opening found, sampled as a portal: {o.describe(self.scene.unit_scale, self.scene.units)} (find_openings = false to turn "
-                 "this off)" for o in ps.openings]
-        notes += self.direct.notes()
-        if ps.dropped:
-            notes.append(f"{ps.dropped} glass {'triangle is' if ps.dropped == 1 else 'triangles are'} not sampled as "
-                         "a portal: no sky behind them (portal = true on the material samples them anyway)")
-        return notes
+        """What the user should hear of the portals (:meth:`LightingContext.notes`)."""
+        return self.context.notes()
 
     # -- bookkeeping ----------------------------------------------------------------
-    def _tick(self, text=None):
+    def _tick(self, run: RunPlan, text=None):
         if self.progress is not None:
             if text:
                 self.progress.describe(text)
-            self.progress.update(self.tracer.rays_traced - self._rays_reported)
-        self._rays_reported = self.tracer.rays_traced
+            self.progress.update(self.tracer.rays_traced - run.rays_reported)
+        run.rays_reported = self.tracer.rays_traced
 
     def _rng(self, *key):
         return np.random.default_rng(np.random.SeedSequence([self.options.seed, *key]))
 
     def _level_active(self, k: int) -> bool:
         """Whether records of level k can be non-zero (else they are never made)."""
-        sky_light = not self.sky.is_dark
-        if k == self.options.bounces:
-            # at the bounce limit a record sees the sky, the ambient value, light surfaces
-            # by specular reflection (a mirror, the outside of a pane) and the sun's
-            # highlight on rough plastic (the sun's images in flat reflectors are direct
-            # light at the hits, which the bounce limit does not reach)
-            reflected_light = (self.direct.has_lights and self._reflects) or self._sun_glossy
-            return sky_light or self.options.ambient > 0 or reflected_light
-        return sky_light or not self.direct.is_dark or self.options.ambient > 0
+        return self.context.level_active(k, self.options.bounces, self.options.ambient)
 
     def _new_cache(self, points) -> IrradianceCache:
         lo = np.minimum(self.scene.triangles.bounds[0], points.min(axis=0))
@@ -450,117 +432,20 @@ class Integrator:
         and (n,) the MIS weight of each ray (1 unless it went through a portal), which
         the radiance and hit weights do not include.
         """
-        mats = self.materials
-        n = len(origins)
-        radiance = np.zeros((n, 3))
-        first_t = np.full(n, np.inf)
-        ray = np.arange(n)
-        o = np.asarray(origins, np.float64)
-        d = np.asarray(directions, np.float64)
-        unit = through is None          # every throughput is 1 until a specular event
-        through = np.ones((n, 3)) if unit else np.array(through, np.float64)
-        mis_weight = np.ones(n)
-        reflected = np.zeros(n, bool)
-        out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
+        weights = None
         if portal_mis is not None:
-            mis_normals, S, n_p = portal_mis[:3]
-            n_p = np.broadcast_to(np.asarray(n_p, np.float64), (n,))     # per ray (0: draws none)
-            reach = portal_mis[3] if len(portal_mis) > 3 else None
-        for depth in range(MAX_SPECULAR_DEPTH + 1):
-            if len(ray) == 0:
-                break
-            hits = self.tracer.intersect(o, d)
-            if depth == 0:
-                first_t[:] = hits.t
-                if portal_mis is not None:
-                    if reach is not None:               # samples on openings: unobstructed up to them
-                        keep = hits.t > reach
-                        mis_weight[~keep] = 0.0
-                        ray, o, d, through, reflected = ray[keep], o[keep], d[keep], through[keep], reflected[keep]
-                        hits = Hits(hits.t[keep], hits.prim[keep])
-                    # (ray = its index among the n rays at depth 0)
-                    p_open = self._portal_density(d, hits.t, origins=o)
-                    mis_weight[ray] = self._hemisphere_weight(mis_normals[ray], d, p_open, S, n_p[ray])
-            esc = np.flatnonzero(~hits.hit)
-            if len(esc):
-                # (the sun seen after a reflection adds nothing here: the direct light
-                # counts it as the sun's image in flat mirrors and panes, lbl_illum.engine.sunmirrors)
-                radiance[ray[esc]] += through[esc] * self.sky.luminance(d[esc])
-            hit = np.flatnonzero(hits.hit)
-            if len(hit) == 0:
-                break
-            P, Ng, Ns = self.tracer.surface(o, d, hits, hit)
-            mat = self.scene.triangles.material[hits.prim[hit]]
-            kind = mats.kind[mat]
-            # diffuse surfaces end the path (plastic: its diffuse part; its specular part
-            # continues below, so a plastic hit is both)
-            dif = np.flatnonzero(self._diffuse_reflector[mat])
-            if len(dif):
-                out["ray"].append(ray[hit[dif]])
-                out["P"].append(P[dif])
-                out["Ns"].append(Ns[dif])
-                out["Ng"].append(Ng[dif])
-                weight = self._rho_over_pi[mat[dif]]
-                if self._plastic_fresnel:           # polished plastic: ρ_d(θ) = (1 − ρ_s(θ)) C
-                    weight = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif])) / np.pi
-                out["weight"].append(weight if unit else through[hit[dif]] * weight)
-            lit = np.flatnonzero((kind == LIGHT) & reflected[hit])
-            if len(lit):
-                radiance[ray[hit[lit]]] += through[hit[lit]] * mats.luminance[mat[lit]]
-            # the sun's highlight on rough plastic, by a shadow ray (its lobe's continuation
-            # below counts no sun; polished plastic shows the sun as a virtual sun instead)
-            if self._sun_glossy:
-                gl = np.flatnonzero(mats.glossy[mat])
-                if len(gl):
-                    radiance[ray[hit[gl]]] += through[hit[gl]] * self.direct.sun_highlight(
-                        d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng)
-            # specular surfaces continue (plastic: by reflection, into its lobe if rough)
-            spec = np.flatnonzero(mats.continues[mat])
-            if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
-                break
-            s_hit = hit[spec]
-            s_mat = mat[spec]
-            ds = d[s_hit]
-            ns = Ns[spec]
-            tau, rho = mats.specular(s_mat, np.einsum("ij,ij->i", ds, ns))
-            p_t = luminance(tau)
-            p_r = luminance(rho)
-            total = p_t + p_r
-            keep = total > 0
-            transmit = rng.random(len(spec)) * np.where(keep, total, 1.0) < p_t
-            refl_dir, rho = mats.reflect(s_mat, ds, ns, rho, rng)
-            new_d = np.where(transmit[:, None], ds, refl_dir)
-            side = np.where(transmit[:, None], -Ng[spec], Ng[spec])
-            safe = np.where(keep, total, 1.0)[:, None]
-            factor = np.where(transmit[:, None], tau / np.maximum(p_t, 1e-300)[:, None],
-                              rho / np.maximum(p_r, 1e-300)[:, None]) * safe
-            new_through = through[s_hit] * factor
-            alive = keep & (new_through.max(axis=1) > 0.0)
-            if self._plastic:                       # weak branches from plastic: Russian roulette
-                weak = np.flatnonzero(alive & (mats.kind[s_mat] == PLASTIC))
-                if len(weak):
-                    alive[weak], new_through[weak] = russian_roulette(new_through[weak], rng, PLASTIC_BRANCH_LIMIT)
-            if portal_mis is not None and depth == 0 and self.portals is not None:
-                through_portal = np.flatnonzero(transmit & mats.portal[s_mat])
-                if len(through_portal):
-                    sel = s_hit[through_portal]
-                    density = p_open[sel] + self._portal_density(d[sel], hits.t[sel], prim=hits.prim[sel])
-                    mis_weight[ray[sel]] = self._hemisphere_weight(mis_normals[ray[sel]], d[sel], density, S,
-                                                                   n_p[ray[sel]])
-            unit = False
-            ray = ray[s_hit][alive]
-            o = self.tracer.offset(P[spec][alive], side[alive])
-            d = new_d[alive]
-            through = new_through[alive]
-            reflected = (reflected[s_hit] | ~transmit)[alive]
-        hits_out = {k: (np.concatenate(v) if v else None) for k, v in out.items()}
-        if hits_out["ray"] is None:
-            hits_out = {"ray": np.zeros(0, np.int64), "P": np.zeros((0, 3)), "Ns": np.zeros((0, 3)),
-                        "Ng": np.zeros((0, 3)), "weight": np.zeros((0, 3))}
-        return first_t, radiance, hits_out, mis_weight
+            weights = _PortalWeights(self, len(origins), *portal_mis[:3])
+        reach = portal_mis[3] if portal_mis is not None and len(portal_mis) > 3 else None
+        if reach is not None:
+            weights.reach = reach
+        paths = follow_paths(self.context, origins, directions, rng, HEMISPHERE, through=through,
+                             portal_weights=weights)
+        hits = {"ray": paths.ray, "P": paths.P, "Ns": paths.Ns, "Ng": paths.Ng, "weight": paths.weight}
+        mis_weight = weights.weight if weights is not None else np.ones(len(origins))
+        return paths.first_t, paths.radiance, hits, mis_weight
 
     # -- placement (top-down) ---------------------------------------------------------
-    def _evaluate_hemispheres(self, k, q: _Queries, pending: _Pending, rng):
+    def _evaluate_hemispheres(self, k, q: _Queries, pending: _Pending, rng, run: RunPlan):
         """Trace the hemispheres of new records at the queries ``q``; return their radii
         R_i (clamped), the shapes W_i of elliptical domains and the leak sectors (both None
         for round domains)."""
@@ -635,11 +520,11 @@ class Integrator:
         pending.known.append(known)
         pending.samples.append(np.full(r, S))
         if self.hessian and self.cache.levels[k].accuracy > 0:
-            return self._hessian_domains(k, P, Ns, dirs, radiance, first_t, m, n)
+            return self._hessian_domains(k, P, Ns, dirs, radiance, first_t, m, n, run)
         R0 = _harmonic_mean_distance(first_t, r, S)
         if self.cache.levels[k].accuracy > 0 and self.gradient_limit:
-            R0 = np.minimum(R0, self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n)[0])
-        return self._clamp_radius(R0, P), None, None
+            R0 = np.minimum(R0, self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n, run)[0])
+        return self._clamp_radius(R0, P, run), None, None
 
     def _path_level(self, k) -> bool:
         """Level k follows one ray per record (accuracy 0 below the first reflection)."""
@@ -665,7 +550,7 @@ class Integrator:
         factor = scaled[keep, 0] / child[keep]
         return keep, weight[keep] * factor[:, None].astype(weight.dtype), child[keep] * factor
 
-    def _light_limit(self, k, P, Ns, dirs, radiance, first_t, m, n):
+    def _light_limit(self, k, P, Ns, dirs, radiance, first_t, m, n, run: RunPlan):
         """R_i ≤ E/|∇_t E| (Ward & Heckbert 1992) for the light that makes a room's
         illuminance non-uniform, sized without the record's own samples of it.
 
@@ -676,7 +561,7 @@ class Integrator:
         windows (:meth:`lbl_illum.engine.portals.PortalSet.inside`) E and ∇E are Lambert's closed
         form for the portals, unoccluded (:func:`lbl_illum.engine.lambert.portal_irradiance`),
         with the interreflected light the bounces still to come add
-        (:meth:`_interreflected`) in E; elsewhere — the ground and the buildings outside,
+        (:meth:`RunPlan.interreflected`) in E; elsewhere — the ground and the buildings outside,
         lit by the open sky, whose estimate from the record's rays is not dominated by a
         few of them — the light its rays found (:meth:`_known_gradient_limit`).
 
@@ -693,53 +578,22 @@ class Integrator:
             sel = (np.repeat(~behind, m * n))
             limit[out] = self._known_gradient_limit(Ns[out], dirs[sel], radiance[sel], first_t[sel], m, n)
         if behind.any():
-            terms[behind] = self._window_terms(P[behind], Ns[behind], k)
+            terms[behind] = self._window_terms(P[behind], Ns[behind], k, run)
             g = np.hypot(terms[behind, 1], terms[behind, 2])
             with np.errstate(divide="ignore", invalid="ignore"):
                 limit[behind] = np.where(g > 0, terms[behind, 0] / g, np.inf)
         return limit, terms, behind
 
-    def _window_terms(self, P, Ns, k):
+    def _window_terms(self, P, Ns, k, run: RunPlan):
         """(r, 6) the portals' light at records of level k: Lambert's E (plus the
-        interreflected estimate of :meth:`_interreflected`), its gradient and Hessian in
-        the tangent plane (:func:`lbl_illum.engine.lambert.portal_irradiance`)."""
-        t = portal_irradiance(P, Ns, orthonormal_basis(Ns), self.portals.vertices, self._portal_luminance,
+        interreflected estimate of :meth:`RunPlan.interreflected`), its gradient and Hessian
+        in the tangent plane (:func:`lbl_illum.engine.lambert.portal_irradiance`)."""
+        t = portal_irradiance(P, Ns, orthonormal_basis(Ns), self.portals.vertices, run.portal_luminance,
                               self.portal_set.outward)
-        t[:, 0] += self._interreflected(k)
+        t[:, 0] += run.interreflected(k)
         return t
 
-    def _interreflected(self, k) -> float:
-        """Estimate [lux] of the interreflected light in the value of a level-k record
-        inside: the split-flux average (Sumpner's law of the integrating sphere) over the
-        B − k bounces still to come, E = Φ ρ / A · (1 − ρ^(B−k)) / (1 − ρ), with Φ the
-        flux through the portals, A the area and ρ the mean diffuse reflectance of the
-        surfaces inside (:meth:`_inside_stats`).  It depends on the scene alone.  The
-        interreflected light varies little over a record's domain; counting it in E keeps
-        a window's gradient from shrinking the domains deep in a room, where most of the
-        light is interreflected."""
-        n = self.options.bounces - k
-        rho = self._inside_rho
-        if n <= 0 or rho <= 0:
-            return 0.0
-        first = self._inside_first_bounce
-        return first * (1.0 - rho ** n) / (1.0 - rho) if rho < 1.0 else first * n
-
-    def _inside_stats(self) -> tuple[float, float]:
-        """(Φ ρ / A [lux], ρ) of the inside zone (:meth:`_interreflected`): Φ = π Σ L_k A_k
-        over the portal triangles (luminance seen through each, :meth:`_portal_sources`),
-        A and ρ the area and the area-weighted diffuse reflectance of the triangles wholly
-        inside (:meth:`lbl_illum.engine.portals.PortalSet.zone`)."""
-        tri = self.scene.triangles
-        inside = (self._zone(tri.vertices.reshape(-1, 3)).reshape(-1, 3) == 1).all(axis=1)
-        area = tri.areas[inside]
-        A = float(area.sum())
-        if A <= 0.0:
-            return 0.0, 0.0
-        rho = float((area * luminance(self.materials.diffuse_reflectance)[tri.material[inside]]).sum() / A)
-        flux = float(np.pi * (self._portal_luminance * self.portals.area).sum())
-        return flux * rho / A, rho
-
-    def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n):
+    def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n, run: RunPlan):
         """Elliptical record domains (``interpolation = "hessian"``): the Hessian radii of
         Schwarzhaupt, Jensen & Jarosz (2012; :func:`~lbl_illum.engine.hemisphere.hessian_radii`)
         of the light that shapes the room, sized without the record's own samples of it,
@@ -755,7 +609,7 @@ class Integrator:
         """
         r, S = len(P), m * n
         accuracy = self.cache.levels[k].accuracy
-        limit, terms, behind = self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n)
+        limit, terms, behind = self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n, run)
         if (~behind).any():
             out = np.flatnonzero(~behind)
             Y = luminance(radiance).reshape(r, S)[out]
@@ -764,14 +618,14 @@ class Integrator:
             scale = np.where(lit, 0.99 * S / np.where(lit, total, 1.0), 0.0)
             values = np.where(lit[:, None], Y * scale[:, None] + 0.01, 1.0).reshape(-1, m, n)
             terms[out] = irradiance_hessian(Ns[out], dirs.reshape(r, m, n, 3)[out], values,
-                                            first_t.reshape(r, m, n)[out], HESSIAN_FAR * self.max_spacing)
+                                            first_t.reshape(r, m, n)[out], HESSIAN_FAR * run.max_spacing)
         R_s, R_l, axis = hessian_radii(Ns, terms, accuracy)
         R0 = _harmonic_mean_distance(first_t, r, S)
         R_s = np.where(behind, np.minimum(R_s, R0), R_s)
         R_l = np.where(behind, np.minimum(R_l, 2.0 * R0), R_l)
         R_s, R_l = np.minimum(R_s, limit), np.minimum(R_l, limit)
-        R_s = self._clamp_radius(R_s, P)
-        R_l = np.minimum(np.maximum(self._clamp_radius(R_l, P), R_s), MAX_ANISOTROPY * R_s)
+        R_s = self._clamp_radius(R_s, P, run)
+        R_l = np.minimum(np.maximum(self._clamp_radius(R_l, P, run), R_s), MAX_ANISOTROPY * R_s)
         W = axis * np.sqrt(np.maximum((R_l / R_s) ** 2 - 1.0, 0.0))[:, None]
         leak = leak_sectors(Ns, dirs.reshape(r, S, 3), first_t.reshape(r, S), accuracy * R_s, accuracy * R_l,
                             axis, n)
@@ -798,22 +652,6 @@ class Integrator:
             limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
         return limit
 
-    def _portal_sources(self):
-        """Per portal triangle, the luminance seen through it from the centre of the query
-        points' box: the sky (or ground glow) in the direction of the triangle's centroid,
-        times the glass's transmittance at that incidence (1 for an opening)."""
-        centre = 0.5 * (self._roi[0] + self._roi[1])
-        d = self.portals.vertices.mean(axis=1) - centre
-        d /= np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
-        L = luminance(self.sky.luminance(d))
-        glass = self._portal_prim >= 0
-        if glass.any():
-            prim = self._portal_prim[glass]
-            cos = np.abs(np.einsum("ij,ij->i", self.tracer.normals[prim], d[glass]))
-            tau = self.materials.glass_transmittance(self.scene.triangles.material[prim], cos)
-            L[glass] *= luminance(tau)
-        return L
-
     def _portal_density(self, directions, t, prim=None, origins=None):
         """Solid-angle density [1/sr] of drawing ``directions`` by one portal sample.
 
@@ -830,29 +668,29 @@ class Integrator:
         directions = np.asarray(directions, np.float64)
         density = np.zeros(len(directions))
         if prim is not None and len(directions):
-            k = self._portal_index[np.asarray(prim, np.int64)]
+            k = self.context.portal_index[np.asarray(prim, np.int64)]
             glass = np.flatnonzero(k >= 0)
             if len(glass):
                 kk = k[glass]
                 cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], directions[glass]))
                 density[glass] = self.portals.pdf_area(kk) * t[glass] ** 2 / np.maximum(cos_p, 1e-300)
-        if origins is None or self._openings is None or len(directions) == 0:
+        if origins is None or self.context.openings is None or len(directions) == 0:
             return density
         live = np.arange(len(directions))
         o = np.asarray(origins, np.float64)
         d, tmax, start = directions, np.asarray(t, np.float64), np.zeros(len(directions))
         for _ in range(MAX_SPECULAR_DEPTH):
-            hits = self._openings.intersect(o, d)
+            hits = self.context.openings.intersect(o, d)
             crossed = hits.t < tmax
             live, o, d, tmax, start, tt, prim_o = (live[crossed], o[crossed], d[crossed], tmax[crossed],
                                                    start[crossed], hits.t[crossed], hits.prim[crossed])
             if len(live) == 0:
                 break
-            kk = self._opening_first + prim_o
+            kk = self.context.opening_first + prim_o
             dist = start + tt                                 # from the ray's origin
             cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], d))
             density[live] += self.portals.pdf_area(kk) * dist ** 2 / np.maximum(cos_p, 1e-300)
-            o, step = step_past(o, d, tt, self._openings.length_scale)
+            o, step = step_past(o, d, tt, self.context.openings.length_scale)
             start, tmax = start + step, tmax - step
         return density
 
@@ -896,7 +734,7 @@ class Integrator:
         w /= np.maximum(dist, 1e-300)[:, None]
         cos_r = np.einsum("ij,ij->i", Ns[owner], w)
         usable = (cos_r > 0.0) & (dist > 0.0)
-        target = self._portal_prim[tri]
+        target = self.context.portal_prim[tri]
         known = np.zeros((r, 3))
         keys = ("P", "Ns", "Ng", "weight")
         parts, owners = [], []
@@ -935,28 +773,31 @@ class Integrator:
         hits = {key: np.concatenate([part[key] for part in parts]) for key in keys}
         return known, hits, np.concatenate(owners)
 
-    def _trace_records(self, k, q: _Queries, pending: _Pending, key: int):
+    def _trace_records(self, k, q: _Queries, pending: _Pending, key: int, run: RunPlan):
         """:meth:`_evaluate_hemispheres` for new records of level k at the queries ``q``, in
         blocks of at most ``MAX_BATCH_RAYS`` rays; block b's random stream is keyed by
         ``key`` plus the index of its first record, so one block draws what the whole batch did."""
         per = max(1, MAX_BATCH_RAYS // max(1, self.options.level_samples(k)))
         if len(q) <= per:
-            return self._evaluate_hemispheres(k, q, pending, self._rng(_TAG_HEMISPHERE, k, key))
+            return self._evaluate_hemispheres(k, q, pending, self._rng(_TAG_HEMISPHERE, k, key), run)
         parts = []
         for start in range(0, len(q), per):
             block = slice(start, start + per)
             rng = self._rng(_TAG_HEMISPHERE, k, key + start)
-            parts.append(self._evaluate_hemispheres(k, q.take(block), pending, rng))
-            self._tick()
+            parts.append(self._evaluate_hemispheres(k, q.take(block), pending, rng, run))
+            self._tick(run)
         return tuple(None if part[0] is None else np.concatenate(part) for part in zip(*parts))
 
-    def _clamp_radius(self, R0, P):
-        lo_box, hi_box = self._roi
+    @staticmethod
+    def _clamp_radius(R0, P, run: RunPlan):
+        """R_i clamped to [min_spacing, max_spacing + δ(P_i)], δ the distance [m] from P_i to
+        the box around the run's query points (the module docstring, "Record radius")."""
+        lo_box, hi_box = run.roi
         outside = np.maximum(0.0, np.maximum(lo_box - P, P - hi_box))
         far = np.linalg.norm(outside, axis=1)
-        return np.clip(R0, self.min_spacing, self.max_spacing + far)
+        return np.clip(R0, run.min_spacing, run.max_spacing + far)
 
-    def place_level(self, k, q: _Queries, stats: RunStats):
+    def place_level(self, k, q: _Queries, run: RunPlan):
         """Make the records of level k that the queries ``q`` need.
 
         Returns ``(pending, own_record)``; ``own_record`` maps each query to its own
@@ -964,6 +805,7 @@ class Integrator:
         """
         lv = self.cache.levels[k]
         pending = _Pending()
+        stats = run.stats
         nq = len(q)
         stats.queries[k] += nq
         if nq == 0:
@@ -971,13 +813,13 @@ class Integrator:
         q = _Queries(q.P, np.asarray(q.Ns, np.float64), np.asarray(q.Ng, np.float64), q.origins, q.importance)
         P, Ns = q.P, q.Ns
         if lv.accuracy == 0.0:
-            R, W, leak = self._trace_records(k, q, pending, lv.count)
+            R, W, leak = self._trace_records(k, q, pending, lv.count, run)
             idx = lv.add(P, Ns, R, W=W, leak=leak)
             pending.records.append(idx)
             stats.new_records[k] += nq
-            self._tick()
+            self._tick(run)
             return pending, idx
-        zone = self._zone(P)
+        zone = self.context.zone(P)
         if lv.count:
             todo = np.flatnonzero(~lv.covers(P, Ns, zone))
         else:
@@ -985,8 +827,8 @@ class Integrator:
         stats.cache_hits += nq - len(todo)
         # the uncovered queries, compacted after every pass
         tP, tN = P[todo], Ns[todo]
-        band = distance_bands(tP, *self._roi, self.max_spacing)
-        cell = 2.0 * lv.accuracy * self.max_spacing
+        band = distance_bands(tP, *run.roi, run.max_spacing)
+        cell = 2.0 * lv.accuracy * run.max_spacing
         passes = 0
         while len(todo):
             passes += 1
@@ -995,7 +837,7 @@ class Integrator:
             else:
                 local = pick_per_cell(tP, tN, band, cell)
             pP, pN = tP[local], tN[local]
-            R, W, leak = self._trace_records(k, q.take(todo[local]), pending, lv.count)
+            R, W, leak = self._trace_records(k, q.take(todo[local]), pending, lv.count, run)
             pZ = zone[todo[local]]
             pending.records.append(lv.add(pP, pN, R, W=W, leak=leak, zone=pZ))
             stats.new_records[k] += len(local)
@@ -1010,7 +852,7 @@ class Integrator:
                 keep[idx[fresh.covers(tP[idx], tN[idx], zone[todo[idx]])]] = False
             todo, tP, tN, band = _compact(keep, todo, tP, tN, band)
             cell *= 0.5
-            self._tick()
+            self._tick(run)
         return pending, None
 
     # -- evaluation (bottom-up) --------------------------------------------------------
@@ -1019,10 +861,10 @@ class Integrator:
         lv = self.cache.levels[k]
         if own_record is not None:
             return lv.E[own_record].astype(np.float64)
-        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper", zone=self._zone(P))
+        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper", zone=self.context.zone(P))
         return E
 
-    def evaluate_level(self, k, pending: _Pending, next_answer):
+    def evaluate_level(self, k, pending: _Pending, next_answer, run: RunPlan):
         """Give the records of ``pending`` their values (Eq. 2)."""
         if not pending.records:
             return
@@ -1049,7 +891,7 @@ class Integrator:
                                np.zeros(0, np.int32) if ray is None else ray,
                                np.ones(0, np.float32) if mis is None else mis,
                                np.zeros((0, 3)) if ray_L is None else ray_L)
-                self._tick()
+                self._tick(run)
         lv.E[records] = (np.pi / S)[:, None] * known
         if ray_L is not None:
             m, n = pending.cells
@@ -1065,40 +907,17 @@ class Integrator:
                 lv.Gr[rec], lv.Gt[rec] = limit_gradients(
                     lv.E[rec], rot, trans, lv.accuracy * lv.R[rec].astype(np.float64), lv.accuracy)
 
-    # -- cache files ---------------------------------------------------------------------
-    #: the cache file of :meth:`attach_cache_file` (None: the cache is kept in memory only)
-    cache_file = None
-
-    def attach_cache_file(self, path, rebuild: bool = False) -> None:
-        """Keep the cache in the file ``path`` (docs/cache-files.md).
-
-        Its records are read now (unless it does not exist, or ``rebuild`` is true) and
-        the cache is written back at the end of every :meth:`compute` — merged, under the
-        file's lock, with records other processes added meanwhile.  A damaged file, or
-        one made for another scene or other settings, is refused with an
-        :class:`~lbl_illum.errors.InputError`; with ``rebuild`` it is replaced instead.
-        A :meth:`compute` that is interrupted (Ctrl-C, SIGTERM, an error) writes the
-        records of the levels it has evaluated (see :meth:`compute`).  Records read
-        replace those the integrator held.
-        """
-        from ..io.cachefile import CacheFile, record_settings
-
-        cache_file = CacheFile(path, rebuild)
-        cache = cache_file.read(self.fingerprint, record_settings(self.scene, self.options))
-        self.cache_file = cache_file
-        if cache is not None:
-            self.cache = cache
-
-    def _open_block(self, k) -> None:
+    def _open_block(self, k, run: RunPlan) -> None:
         """Remember level k's records and octree root as a block of its queries begins."""
         lv = self.cache.levels[k]
-        self._open[k] = (lv.count, lv.node_center[0].copy(), float(lv.node_half[0]))
+        run.open_blocks[k] = (lv.count, lv.node_center[0].copy(), float(lv.node_half[0]))
 
-    def _close_block(self, k) -> None:
+    @staticmethod
+    def _close_block(k, run: RunPlan) -> None:
         """Level k's block is evaluated: its records are complete."""
-        self._open.pop(k, None)
+        run.open_blocks.pop(k, None)
 
-    def _drop_unevaluated(self, start) -> bool:
+    def _drop_unevaluated(self, start, run: RunPlan) -> bool:
         """After an interruption: drop the records of the open blocks (placed, without
         values), each level going back to the records and octree root it had when its
         open block began, and the records of levels that do not interpolate (accuracy 0:
@@ -1106,13 +925,13 @@ class Integrator:
         level at the start of the run.  Returns whether a level that interpolates kept
         records this run made."""
         for k, lv in enumerate(self.cache.levels):
-            state = start[k] if lv.accuracy == 0.0 else self._open.get(k)
+            state = start[k] if lv.accuracy == 0.0 else run.open_blocks.get(k)
             if state is not None and lv.count > state[0]:
                 lv.truncate(*state)
-        self._open = {}
+        run.open_blocks.clear()
         return any(lv.count > start[k][0] and lv.accuracy > 0 for k, lv in enumerate(self.cache.levels))
 
-    def _solve_level(self, k, q: _Queries, stats: RunStats):
+    def _solve_level(self, k, q: _Queries, run: RunPlan):
         """Make level k's records for the queries ``q`` and give them values.
 
         The queries are taken in blocks of ``QUERY_BLOCK``.  For each: place the records
@@ -1127,27 +946,33 @@ class Integrator:
         blocks = max(1, -(-n // QUERY_BLOCK))
         for b in range(blocks):
             part = slice(b * QUERY_BLOCK, (b + 1) * QUERY_BLOCK)
-            self._open_block(k)
+            self._open_block(k, run)
             where = f", block {b + 1} of {blocks}" if blocks > 1 else ""
-            self._tick(f"placing level {k} ({len(q.P[part])} queries{where})")
-            pending, own = self.place_level(k, q.take(part), stats)
+            self._tick(run, f"placing level {k} ({len(q.P[part])} queries{where})")
+            pending, own = self.place_level(k, q.take(part), run)
             own_parts.append(own)
             hP = pending.cat("hit_P")
             deeper = len(hP) > 0 and k + 1 <= B and self._level_active(k + 1)
             child = pending.cat("hit_importance", width=0) if pending.hit_importance else None
             hits = _Queries(hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), importance=child)
-            own_next = self._solve_level(k + 1, hits, stats) if deeper else None
-            self._tick(f"evaluating level {k}{where}")
+            own_next = self._solve_level(k + 1, hits, run) if deeper else None
+            self._tick(run, f"evaluating level {k}{where}")
             next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
-            self.evaluate_level(k, pending, next_answer)
-            self._close_block(k)
+            self.evaluate_level(k, pending, next_answer, run)
+            self._close_block(k, run)
         if any(own is None for own in own_parts):
             return None
         return np.concatenate(own_parts)
 
     # -- the whole calculation -----------------------------------------------------------
-    def compute(self, points, normals) -> IlluminanceResult:
+    def compute(self, points, normals, spacing: tuple[float, float] | None = None) -> IlluminanceResult:
         """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``.
+
+        ``spacing = (min, max)`` [m] are this run's record spacing limits where the options
+        leave them unset (the renderer's limits from the view); by default they come from
+        the extent of the points (:func:`default_spacing`).  Everything that depends on
+        the run is gathered into a :class:`RunPlan` handed to every stage; the integrator
+        itself keeps only its cache.
 
         Interruptions.  Each level's queries are taken in blocks (``QUERY_BLOCK``); a
         block's records are placed, the level below is solved for their hits, and then
@@ -1156,17 +981,15 @@ class Integrator:
         that are done hold complete records and the open block of each level holds
         records without values.  Those are dropped (each level returns to the records and
         octree it had when its open block began), the rest is kept and, with a cache file
-        attached (:meth:`attach_cache_file`), written before the exception goes on; the
+        attached (:attr:`keeper`, :func:`lbl_illum.io.cachefile.attach_cache_file`), written before the exception goes on; the
         exception then carries ``saved_cache`` (the file) and ``saved_records`` (records
         per level in it).  A second run over the same points with the same file and seed
         finds every query of a finished block covered and places the open blocks exactly
         as the first run did (their records and random streams are the same), and so
         gives bit-identical results to a run that was never interrupted.
         """
-        from ..io.cachefile import deferred_interrupts, record_settings, sigterm_as_interrupt
-
         t0 = time.perf_counter()
-        self._rays_reported = rays_before = self.tracer.rays_traced
+        rays_before = self.tracer.rays_traced
         points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
         normals = np.asarray(normals, np.float64).reshape(-1, 3)
         normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
@@ -1178,22 +1001,23 @@ class Integrator:
             self.cache.settings = record_settings(self.scene, self.options)
         # the spacing probe traces rays: skip it when no level can hold light (nothing
         # indirect is computed) or when both limits are given
-        probe = (len(points) > 0 and self._level_active(0)
-                 and not (self.options.min_spacing and self.options.max_spacing))
+        given_min, given_max = self.options.min_spacing, self.options.max_spacing
+        if spacing is not None:
+            given_min, given_max = given_min or spacing[0], given_max or spacing[1]
+        probe = len(points) > 0 and self._level_active(0) and not (given_min and given_max)
         auto_min, auto_max = self.default_spacing(points, normals) if probe else (1.0, 1.0)
-        self.max_spacing = self.options.max_spacing if self.options.max_spacing else auto_max
-        self.min_spacing = self.options.min_spacing if self.options.min_spacing else min(
-            auto_min, self.max_spacing)
-        self.min_spacing = min(self.min_spacing, self.max_spacing)
-        stats.min_spacing, stats.max_spacing = self.min_spacing, self.max_spacing
-        self._roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
-        self._portal_luminance = self._portal_sources() if self.portals is not None else None
-        self._inside_first_bounce, self._inside_rho = self._inside_stats() if self.portals is not None else (0.0, 0.0)
+        max_spacing = given_max if given_max else auto_max
+        min_spacing = min(given_min if given_min else auto_min, max_spacing)
+        stats.min_spacing, stats.max_spacing = min_spacing, max_spacing
+        roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
+        portal_luminance = self.context.portal_luminance(roi) if self.portals is not None else None
+        inside = self.context.inside_stats(portal_luminance) if self.portals is not None else (0.0, 0.0)
+        run = RunPlan(B, min_spacing, max_spacing, roi, portal_luminance, inside, stats, rays_reported=rays_before)
 
         # what each level held before this run, to return to if it is interrupted
         start = [(lv.count, lv.node_center[0].copy(), float(lv.node_half[0])) for lv in self.cache.levels]
-        self._open = {}
-        with sigterm_as_interrupt() if self.cache_file is not None else contextlib.nullcontext():
+        keeper = self.keeper
+        with keeper.guard() if keeper is not None else contextlib.nullcontext():
             try:
                 # placement top-down and evaluation bottom-up, block by block
                 own0 = None
@@ -1202,10 +1026,10 @@ class Integrator:
                 # hemispheres (without direct light, level 0 finds those of its new records)
                 origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
                 if solved:
-                    own0 = self._solve_level(0, _Queries(points, normals, normals, origins), stats)
+                    own0 = self._solve_level(0, _Queries(points, normals, normals, origins), run)
 
                 # answers at the query points
-                self._tick("direct light at the points")
+                self._tick(run, "direct light at the points")
                 direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
                                                  light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
                 if solved:
@@ -1213,40 +1037,17 @@ class Integrator:
                 else:
                     indirect = np.zeros_like(direct)
             except BaseException as exc:
-                with deferred_interrupts():
-                    gained = self._drop_unevaluated(start)
-                    if self.cache_file is not None and gained:
-                        exc.saved_records = self.cache_file.write(self.cache)
-                        exc.saved_cache = str(self.cache_file.path)
+                with keeper.hold() if keeper is not None else contextlib.nullcontext():
+                    gained = self._drop_unevaluated(start, run)
+                    if keeper is not None and gained:
+                        exc.saved_records = keeper.save(self.cache)
+                        exc.saved_cache = keeper.name
                 raise
-            if self.cache_file is not None:
-                self._tick("writing the cache file")
-                self.cache_file.write(self.cache)
-        self._tick("done")
+            if keeper is not None:
+                self._tick(run, "writing the cache file")
+                keeper.save(self.cache)
+        self._tick(run, "done")
         stats.records = self.cache.record_counts
         stats.rays = self.tracer.rays_traced - rays_before
         stats.seconds = time.perf_counter() - t0
         return IlluminanceResult(direct + indirect, direct, indirect, stats)
-
-
-def compute_illuminance(scene: Scene, points, normals, options: Options | None = None,
-                        cache: IrradianceCache | None = None, progress=None, cache_file=None,
-                        rebuild_cache: bool = False) -> IlluminanceResult:
-    """Illuminance [lux] at sensor ``points`` [m] facing ``normals``: direct + indirect.
-
-    ``cache_file`` (a path) keeps the records in a file: read first, written at the end
-    and on interruption, merged with other processes' records
-    (:meth:`Integrator.attach_cache_file`; ``rebuild_cache`` replaces a file made for
-    other settings instead of refusing it).
-
-    Example
-    -------
-    >>> from lbl_illum import load_scene, compute_illuminance, read_points
-    >>> scene = load_scene("examples/office/scene.toml")          # doctest: +SKIP
-    >>> pts, nrm = read_points("examples/office/grid.pts", scene.unit_scale)  # doctest: +SKIP
-    >>> compute_illuminance(scene, pts, nrm).illuminance.mean()   # doctest: +SKIP
-    """
-    integ = Integrator(scene, options, cache, progress)
-    if cache_file is not None:
-        integ.attach_cache_file(cache_file, rebuild=rebuild_cache)
-    return integ.compute(points, normals)

@@ -90,8 +90,8 @@ import numpy as np
 
 from .cache import IrradianceCache
 from ..errors import InputError
-from .integrator import MAX_SPECULAR_DEPTH, Integrator
-from ..scene.materials import GLASS, LIGHT, MIRROR, PLASTIC, russian_roulette
+from .integrator import Integrator
+from .paths import CAMERA, WEIGHT_LIMIT, follow_paths
 from ..options import Options
 from ..photometry import luminance
 from ..scene.scenefile import Scene
@@ -100,9 +100,6 @@ from ..scene.views import View
 __all__ = ["RenderResult", "RenderStats", "render", "trace_view_paths", "image_options", "view_spacing",
            "WEIGHT_LIMIT"]
 
-#: Photometric throughput below which a specular branch plays Russian roulette
-#: (the role of Radiance's ``-lw``).
-WEIGHT_LIMIT = 2e-3
 #: Percentiles of the diffuse hits' coordinates whose box sets an image's record spacing.
 SPACING_PERCENTILES = (5.0, 95.0)
 #: Random-stream tags (the integrator uses 1-4).
@@ -214,48 +211,16 @@ def _scatter_add(out: np.ndarray, index: np.ndarray, values: np.ndarray) -> None
         out[:, c] += np.bincount(index, values[:, c], minlength=len(out))
 
 
-def _continue_specular(integ: Integrator, d, P, Ng, Ns, mat, through, rng, sun_done):
-    """Continuations of rays that hit a mirror, glass or plastic:
-    (rows, origins, directions, throughput, sun_done).
-
-    ``rows`` index the hits each continuation comes from (a glass hit gives two).
-    Mirror: reflection about the shading normal, × ρ.  Glass (thin panes, no
-    refraction, as the integrator's): reflection × ρ(θ) and straight transmission
-    × τ(θ) at the ray's angle of incidence θ (:meth:`MaterialTable.specular`: Fresnel
-    glazing, or constants).  Plastic: polished, reflection × ρ_s(θ); rough, a direction
-    drawn from its lobe × ρ_s × the sample's weight (:meth:`MaterialTable.reflect`).
-    Weak branches play Russian roulette (``WEIGHT_LIMIT``).  ``sun_done`` (k,) marks the
-    hits whose ray must not count the sun disk; a continuation inherits it through glass,
-    gets True from rough plastic (whose sun highlight :meth:`DirectLight.sun_highlight` took) and
-    False from any other reflection.
-    """
-    mats = integ.materials
-    kind = mats.kind[mat]
-    cos_i = np.einsum("ij,ij->i", d, Ns)
-    tau, rho = mats.specular(mat, cos_i)
-    reflects = np.flatnonzero(((kind == MIRROR) | (kind == GLASS) | (kind == PLASTIC)) & (rho.max(axis=1) > 0.0))
-    transmits = np.flatnonzero((kind == GLASS) & (tau.max(axis=1) > 0.0))
-    refl, rho_refl = mats.reflect(mat[reflects], d[reflects], Ns[reflects], rho[reflects], rng)
-    rows = np.concatenate([reflects, transmits])
-    directions = np.concatenate([refl, d[transmits]])
-    side = np.concatenate([Ng[reflects], -Ng[transmits]])
-    factor = np.concatenate([rho_refl, tau[transmits]])
-    done = np.concatenate([mats.glossy[mat[reflects]], sun_done[transmits]])
-    new_through = through[rows] * factor
-    keep, new_through = russian_roulette(new_through, rng, WEIGHT_LIMIT)
-    rows, directions, side, new_through, done = rows[keep], directions[keep], side[keep], new_through[keep], done[keep]
-    origins = integ.tracer.offset(P[rows], side)
-    return rows, origins, directions, new_through, done
-
-
 def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndarray, rng: np.random.Generator,
                      tmax: np.ndarray | None = None, progress=None):
     """Follow camera rays through mirrors, glass and the specular part of plastic to the
-    sky, an emitter or a diffuse surface (plastic's diffuse part among them).
+    sky, an emitter or a diffuse surface (plastic's diffuse part among them): the path
+    follower with the camera's policy (:data:`lbl_illum.engine.paths.CAMERA`: split at
+    glass, every emitter and the sun's disk seen).
 
     Parameters
     ----------
-    integ : the integrator whose tracer, materials, sky and sun are used
+    integ : the integrator whose lighting context (tracer, materials, sky, sun) is used
     origins, directions : (n, 3) [m] and unit camera rays
     rng : random numbers for Russian roulette of weak branches, the lobes of rough
         plastic and their sun highlights
@@ -272,78 +237,8 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
         the diffuse hits, whose luminance is weight · E(P, N)
     rays : rays traced
     """
-    n = len(origins)
-    radiance = np.zeros((n, 3))
-    ray = np.arange(n)
-    o = np.asarray(origins, np.float64)
-    d = np.asarray(directions, np.float64)
-    through = np.ones((n, 3))
-    sky, sun = integ.sky, integ.sun
-    mats = integ.materials
-    material_of = integ.scene.triangles.material
-    diffuse = mats.diffuse_reflectance.max(axis=1) > 0.0      # diffuse surfaces and plastic
-    sun_done = np.zeros(n, bool)     # the ray must not count the sun disk (see the module text)
-    out = {"ray": [], "P": [], "N": [], "weight": []}
-    rays = 0
-    for depth in range(MAX_SPECULAR_DEPTH + 1):
-        if len(ray) == 0:
-            break
-        hits = integ.tracer.intersect(o, d)
-        rays += len(ray)
-        if progress is not None:
-            progress.update(len(ray))
-        reached = hits.hit
-        escaped = ~hits.hit
-        if depth == 0 and tmax is not None:
-            clip = np.asarray(tmax, np.float64)
-            reached = reached & (hits.t <= clip)
-            escaped = escaped & ~np.isfinite(clip)
-        # -- escaped: sky, ground glow, sun disk
-        esc = np.flatnonzero(escaped)
-        if len(esc):
-            L = sky.luminance(d[esc])
-            if sun is not None:
-                L[sun.within_disk(d[esc]) & ~sun_done[esc]] += sun.luminance
-            _scatter_add(radiance, ray[esc], through[esc] * L)
-        hit = np.flatnonzero(reached)
-        if len(hit) == 0:
-            break
-        P, Ng, Ns = integ.tracer.surface(o, d, hits, hit)
-        mat = material_of[hits.prim[hit]]
-        kind = mats.kind[mat]
-        # -- emitters, seen directly, through glass or in a mirror
-        lit = np.flatnonzero(kind == LIGHT)
-        if len(lit):
-            _scatter_add(radiance, ray[hit[lit]], through[hit[lit]] * mats.luminance[mat[lit]])
-        # -- diffuse surfaces (and plastic's diffuse part) end the path; their luminance
-        #    comes from the cache
-        dif = np.flatnonzero(diffuse[mat])
-        if len(dif):
-            out["ray"].append(ray[hit[dif]])
-            out["P"].append(P[dif])
-            out["N"].append(Ns[dif])
-            rho_d = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif]))
-            out["weight"].append(through[hit[dif]] * (rho_d / np.pi))
-        # -- the sun's highlight on rough plastic, by a shadow ray
-        if sun is not None:
-            gl = np.flatnonzero(mats.glossy[mat])
-            if len(gl):
-                _scatter_add(radiance, ray[hit[gl]], through[hit[gl]] * integ.direct.sun_highlight(
-                    d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng))
-        # -- mirrors, glass and plastic's specular part continue
-        spec = np.flatnonzero(mats.continues[mat])
-        if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
-            break
-        s_hit = hit[spec]
-        rows, o, d, through, sun_done = _continue_specular(integ, d[s_hit], P[spec], Ng[spec], Ns[spec], mat[spec],
-                                                           through[s_hit], rng, sun_done[s_hit])
-        ray = ray[s_hit][rows]
-    if out["ray"]:
-        hits_out = {k: np.concatenate(v) for k, v in out.items()}
-    else:
-        hits_out = {"ray": np.zeros(0, np.int64), "P": np.zeros((0, 3)), "N": np.zeros((0, 3)),
-                    "weight": np.zeros((0, 3))}
-    return radiance, hits_out, rays
+    paths = follow_paths(integ.context, origins, directions, rng, CAMERA, tmax=tmax, progress=progress)
+    return paths.radiance, {"ray": paths.ray, "P": paths.P, "N": paths.Ns, "weight": paths.weight}, paths.rays
 
 
 # ---------------------------------------------------------------------------
@@ -413,15 +308,9 @@ def render(scene: Scene, view: View, width: int, height: int, options: Options |
     # 2. the full illuminance at every diffuse hit, in one call through the cache
     radiance = known
     if len(hits["ray"]):
-        saved = integ.options
-        if saved.min_spacing is None and saved.max_spacing is None:
-            spacing = view_spacing(hits["P"])
-            if spacing is not None:
-                integ.options = dataclasses.replace(saved, min_spacing=spacing[0], max_spacing=spacing[1])
-        try:
-            result = integ.compute(hits["P"], hits["N"])
-        finally:
-            integ.options = saved
+        # record spacing from the view where the options give none (view_spacing)
+        spacing = view_spacing(hits["P"]) if opts.min_spacing is None and opts.max_spacing is None else None
+        result = integ.compute(hits["P"], hits["N"], spacing=spacing)
         _scatter_add(radiance, hits["ray"], hits["weight"] * result.rgb)
         rs = result.stats
         stats.records, stats.new_records, stats.queries = list(rs.records), list(rs.new_records), list(rs.queries)

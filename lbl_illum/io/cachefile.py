@@ -28,11 +28,12 @@ from pathlib import Path
 import numpy as np
 
 from ..engine.cache import IrradianceCache, LevelRecords
+from ..engine.fingerprint import plain_json, record_settings
 from ..errors import InputError
 from .files import atomic_write_bytes
 from .locking import file_lock
 
-__all__ = ["CacheData", "CacheFile", "CACHE_FORMAT_VERSION", "Terminated", "cache_data", "cache_from_data",
+__all__ = ["CacheData", "CacheFile", "attach_cache_file", "CACHE_FORMAT_VERSION", "Terminated", "cache_data", "cache_from_data",
            "save_cache", "load_cache", "read_cache_file", "write_cache_file", "merge_cache_data",
            "record_settings", "settings_differences", "sigterm_as_interrupt", "deferred_interrupts"]
 
@@ -179,7 +180,7 @@ def _checksum(header: dict, arrays: dict) -> str:
     name, dtype, shape and bytes in name order (format version 2)."""
     h = hashlib.sha256()
     h.update(json.dumps({k: v for k, v in header.items() if k != "checksum"}, sort_keys=True,
-                        separators=(",", ":"), default=_plain).encode())
+                        separators=(",", ":"), default=plain_json).encode())
     for name in sorted(arrays):
         arr = np.ascontiguousarray(arrays[name])
         h.update(f"\n{name} {arr.dtype.str} {arr.shape}\n".encode())
@@ -202,17 +203,8 @@ def write_cache_file(path: str | os.PathLike, data: CacheData) -> None:
     header["version"] = CACHE_FORMAT_VERSION
     header["checksum"] = _checksum(header, data.arrays)
     buf = io.BytesIO()
-    np.savez(buf, header=np.array(json.dumps(header, sort_keys=True, default=_plain)), **data.arrays)
+    np.savez(buf, header=np.array(json.dumps(header, sort_keys=True, default=plain_json)), **data.arrays)
     atomic_write_bytes(path, buf.getvalue())
-
-
-def _plain(value):
-    """JSON for the numpy scalars and arrays a settings summary may hold."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
 
 
 def read_cache_file(path: str | os.PathLike) -> CacheData:
@@ -439,48 +431,6 @@ def merge_cache_data(base: CacheData, other: CacheData) -> tuple[CacheData, int]
 
 # -- what the fingerprint covers, readably ------------------------------------------------
 
-def record_settings(scene, options) -> dict:
-    """A readable summary of what a cache's records depend on: the geometry's size and
-    bounds [m], every material (all its parameters but its name and the portal flag), the
-    sky's and the sun's parameters, and the options that change the records' values or
-    domains (``domains`` is ``elliptical`` for ``interpolation = "hessian"``, else
-    ``round``).  Left out, because records stay valid when they change: the seed, the
-    spacing limits, the query points and the interpolation rule of round domains.  The
-    portals are in the fingerprint (their zones decide which records serve which queries)
-    but not in this summary.
-
-    Written to the header of cache files and compared with the current summary when a
-    file is refused, to name what differs.  Plain JSON types (lists, not tuples).
-    """
-    import dataclasses
-
-    tri = scene.triangles
-    bounds = tri.bounds if len(tri) else (np.zeros(3), np.zeros(3))
-    materials = {}
-    for m in scene.materials:
-        d = dataclasses.asdict(m) if dataclasses.is_dataclass(m) else dict(vars(m))
-        d.pop("portal", None)
-        materials[str(d.pop("name", len(materials)))] = d
-    sun = None
-    if scene.sun is not None:
-        sun = {"altitude": float(scene.sun.altitude), "azimuth": float(scene.sun.azimuth),
-               "direct_normal_illuminance": float(scene.sun.direct_normal_illuminance)}
-    B = options.bounces
-    out = {
-        "geometry": {"triangles": len(tri), "spheres": int(len(tri.sphere_radius)),
-                     "bounds": [np.asarray(bounds[0]).tolist(), np.asarray(bounds[1]).tolist()]},
-        "materials": materials,
-        "sky": dict(scene.sky.parameters),
-        "sun": sun,
-        "accuracy": options.accuracy, "bounces": B, "samples": options.samples, "ambient": options.ambient,
-        "bounce_scaling": options.bounce_scaling, "point_samples": options.point_samples,
-        "domains": "elliptical" if options.interpolation == "hessian" else "round",
-        "level_accuracy": [options.level_accuracy(k) for k in range(B + 1)],
-        "level_samples": [options.level_samples(k) for k in range(B + 1)],
-    }
-    return json.loads(json.dumps(out, default=_plain))      # plain JSON types, as a file gives them back
-
-
 #: Summary keys that follow from others (named in a refusal only if nothing else differs).
 _DERIVED = ("level_accuracy", "level_samples")
 
@@ -589,3 +539,40 @@ class CacheFile:
         counts = cache.save(self.path, merge=not self.rebuild)
         self.rebuild = False
         return counts
+
+    # -- the record keeper of an Integrator (lbl_illum.engine.integrator.Integrator.keeper)
+    @property
+    def name(self) -> str:
+        """The file's path, as the user gave it."""
+        return str(self.path)
+
+    def guard(self):
+        """Around a run: SIGTERM stops it as Ctrl-C does, so that it saves what it completed."""
+        return sigterm_as_interrupt()
+
+    def hold(self):
+        """While records are dropped or saved: Ctrl-C and SIGTERM wait for the end."""
+        return deferred_interrupts()
+
+    def save(self, cache: IrradianceCache) -> list[int]:
+        """:meth:`write`, as the integrator calls it at the end of a run or on interruption."""
+        return self.write(cache)
+
+
+def attach_cache_file(integrator, path: str | os.PathLike, rebuild: bool = False) -> CacheFile:
+    """Keep ``integrator``'s cache in the file ``path`` (docs/cache-files.md).
+
+    Its records are read now (unless it does not exist, or ``rebuild`` is true) and
+    replace those the integrator held; the cache is written back at the end of every
+    :meth:`~lbl_illum.engine.integrator.Integrator.compute` — merged, under the file's lock,
+    with records other processes added meanwhile.  A damaged file, or one made for
+    another scene or other settings, is refused with an :class:`~lbl_illum.errors.InputError`;
+    with ``rebuild`` it is replaced instead.  A run that is interrupted (Ctrl-C, SIGTERM,
+    an error) writes the records of the levels it has evaluated.  Returns the file.
+    """
+    cache_file = CacheFile(path, rebuild)
+    cache = cache_file.read(integrator.fingerprint, record_settings(integrator.scene, integrator.options))
+    integrator.keeper = cache_file
+    if cache is not None:
+        integrator.cache = cache
+    return cache_file

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lbl_illum.engine.integrator import Integrator
+from lbl_illum.engine.context import LightingContext
+from lbl_illum.engine.integrator import Integrator, RunPlan, RunStats
 from lbl_illum.scene.materials import GLASS
 from lbl_illum.engine.openings import find_openings
 from lbl_illum.options import Options
@@ -170,12 +171,13 @@ def test_interreflected_estimate_of_a_closed_room():
     """The split-flux estimate behind the record sizes: Φ ρ / A over the inside surfaces,
     with Φ = π Σ L_k A_k through the portals."""
     scene = scene_of(box_room(south=False) + wall_with_hole(0.0))
-    integ = Integrator(scene, Options(bounces=4))
+    context = LightingContext.of(scene)
     P = np.array([[2.0, 3.0, 0.8]])
-    integ.compute(P, np.array([[0, 0, 1.0]]))
+    luminance = context.portal_luminance((P[0], P[0]))
     A = 4 * 6 * 2 + 2 * 6 * 3 + 4 * 3 + 4 * 3 - 2.0                      # the room's surfaces, less the hole
-    flux = np.pi * float((integ._portal_luminance * integ.portals.area).sum())
-    first, rho = integ._inside_stats()
+    flux = np.pi * float((luminance * context.portals.area).sum())
+    first, rho = context.inside_stats(luminance)
     assert rho == pytest.approx(0.5) and first == pytest.approx(flux * 0.5 / A, rel=1e-9)
-    assert integ._interreflected(4) == 0.0                               # the bounce limit: none to come
-    assert integ._interreflected(2) == pytest.approx(first * (1 + 0.5), rel=1e-12)
+    run = RunPlan(4, 0.1, 1.0, (P[0], P[0]), luminance, (first, rho), RunStats())
+    assert run.interreflected(4) == 0.0                                  # the bounce limit: none to come
+    assert run.interreflected(2) == pytest.approx(first * (1 + 0.5), rel=1e-12)

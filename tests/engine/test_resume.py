@@ -21,6 +21,7 @@ import pytest
 from lbl_illum import IrradianceCache, Options, load_scene, read_points
 from lbl_illum.engine import integrator
 from lbl_illum.engine.integrator import Integrator
+from lbl_illum.io.cachefile import attach_cache_file
 
 from conftest import EXAMPLES, ROOT
 
@@ -71,7 +72,7 @@ def test_interrupted_run_resumes_to_the_uninterrupted_result(office, reference, 
     ref = reference[name]
     path = tmp_path / "office.lblcache"
     first = Integrator(scene, opts, progress=StopAt(stage))
-    first.attach_cache_file(path)
+    attach_cache_file(first, path)
     with pytest.raises(KeyboardInterrupt) as info:
         first.compute(points, normals)
     expected = [ref.stats.records[k] if keep is True else 0 for k, keep in enumerate(kept)]
@@ -84,7 +85,7 @@ def test_interrupted_run_resumes_to_the_uninterrupted_result(office, reference, 
     assert [lv.count for lv in first.cache.levels][1:] == expected[1:]
 
     second = Integrator(scene, opts)
-    second.attach_cache_file(path)
+    attach_cache_file(second, path)
     result = second.compute(points, normals)
     assert np.array_equal(result.rgb, ref.rgb)
     assert result.stats.records == ref.stats.records
@@ -93,7 +94,7 @@ def test_interrupted_run_resumes_to_the_uninterrupted_result(office, reference, 
             assert result.stats.new_records[k] == 0
     # and the file now holds what an uninterrupted run with a cache file writes
     third = Integrator(scene, opts)
-    third.attach_cache_file(tmp_path / "fresh.lblcache")
+    attach_cache_file(third, tmp_path / "fresh.lblcache")
     third.compute(points, normals)
     assert IrradianceCache.load(path).record_counts == IrradianceCache.load(tmp_path / "fresh.lblcache").record_counts
 
@@ -119,6 +120,7 @@ CHILD = textwrap.dedent("""
     from lbl_illum import Options, load_scene, read_points
     from lbl_illum.engine import integrator
     from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.io.cachefile import attach_cache_file
 
     if len(sys.argv) > 5:
         integrator.QUERY_BLOCK = int(sys.argv[5])
@@ -136,7 +138,7 @@ CHILD = textwrap.dedent("""
             pass
 
     integ = Integrator(scene, Options(accuracy=0.2, bounces=2, samples=128), progress=WaitThere())
-    integ.attach_cache_file(sys.argv[3])
+    attach_cache_file(integ, sys.argv[3])
     try:
         integ.compute(points, normals)
     except KeyboardInterrupt as exc:
@@ -177,7 +179,7 @@ def test_signalled_subprocess_saves_and_resumes(office, reference, tmp_path, sig
     saved = IrradianceCache.load(path).record_counts
     assert saved == [0, 0, reference["round"].stats.records[2]]
     second = Integrator(scene, OPTS)
-    second.attach_cache_file(path)
+    attach_cache_file(second, path)
     result = second.compute(points, normals)
     assert result.stats.new_records[2] == 0
     assert np.array_equal(result.rgb, reference["round"].rgb)
@@ -195,7 +197,7 @@ def test_subprocess_terminated_while_placing_resumes(office, blocked_reference, 
     saved = IrradianceCache.load(path).record_counts
     assert saved[0] > 0 and all(saved)
     second = Integrator(scene, OPTS)
-    second.attach_cache_file(path)
+    attach_cache_file(second, path)
     result = second.compute(points, normals)
     assert np.array_equal(result.rgb, blocked_reference.rgb)
 
@@ -206,7 +208,7 @@ def test_killed_subprocess_leaves_the_old_file_intact(office, tmp_path):
     scene, points, normals = office
     path = tmp_path / "office.lblcache"
     first = Integrator(scene, OPTS)
-    first.attach_cache_file(path)
+    attach_cache_file(first, path)
     first.compute(points[:4], normals[:4])
     before = path.read_bytes()
     signal_child(tmp_path, path, "writing the cache file", signal.SIGKILL)
@@ -263,7 +265,7 @@ def test_interruption_during_placement_keeps_the_finished_blocks(office, blocked
     assert len(points) > SMALL_BLOCK                      # level 0 itself has two blocks
     path = tmp_path / "office.lblcache"
     first = Integrator(scene, OPTS, progress=StopAfter(stage, count))
-    first.attach_cache_file(path)
+    attach_cache_file(first, path)
     with pytest.raises(KeyboardInterrupt) as info:
         first.compute(points, normals)
     saved = IrradianceCache.load(path).record_counts
@@ -273,7 +275,7 @@ def test_interruption_during_placement_keeps_the_finished_blocks(office, blocked
     if stage == "placing level 0":
         assert saved[0] > 0                                # level 0's first block, evaluated
     second = Integrator(scene, OPTS)
-    second.attach_cache_file(path)
+    attach_cache_file(second, path)
     result = second.compute(points, normals)
     assert np.array_equal(result.rgb, ref.rgb)
     assert result.stats.records == ref.stats.records

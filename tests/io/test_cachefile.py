@@ -14,6 +14,7 @@ import pytest
 from lbl_illum import InputError, IrradianceCache, Options, load_scene, read_points
 from lbl_illum.io.cachefile import CACHE_FORMAT_VERSION, CacheData, merge_cache_data, read_cache_file, record_settings, write_cache_file
 from lbl_illum.engine.integrator import Integrator
+from lbl_illum.io.cachefile import attach_cache_file
 
 from conftest import EXAMPLES, ROOT
 
@@ -267,8 +268,8 @@ def test_other_settings_are_named_in_the_refusal_and_rebuild_replaces_the_file(o
     other = Integrator(scene, OPTS.replace(samples=64))
     with pytest.raises(InputError, match=r"c.lblcache: cache was made for another scene or other settings "
                                          r"\(samples differ\); use another file or rebuild it"):
-        other.attach_cache_file(target)
-    other.attach_cache_file(target, rebuild=True)
+        attach_cache_file(other, target)
+    attach_cache_file(other, target, rebuild=True)
     assert other.cache is None
     other.compute(points[:3], normals[:3])
     assert read_cache_file(target).fingerprint == other.fingerprint
@@ -292,12 +293,12 @@ def test_accuracy_zero_levels_are_not_written(office, tmp_path):
     opts = OPTS.replace(point_samples=256)
     path = tmp_path / "p.lblcache"
     first = Integrator(scene, opts)
-    first.attach_cache_file(path)
+    attach_cache_file(first, path)
     r1 = first.compute(points, normals)
     assert first.cache.levels[0].accuracy == 0 and r1.stats.records[0] == len(points)
     assert read_cache_file(path).record_counts[0] == 0
     second = Integrator(scene, opts)
-    second.attach_cache_file(path)
+    attach_cache_file(second, path)
     r2 = second.compute(points, normals)
     assert r2.stats.new_records[1:] == [0, 0]
     assert np.array_equal(r1.rgb, r2.rgb)
@@ -344,6 +345,7 @@ CONCURRENT = textwrap.dedent('''
     import os, sys, time
     from lbl_illum import Options, load_scene, read_points
     from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.io.cachefile import attach_cache_file
 
     scene_file, points_file, shared, own, me, other, part = sys.argv[1:8]
     scene = load_scene(scene_file)
@@ -369,7 +371,7 @@ CONCURRENT = textwrap.dedent('''
     bar = Barrier()
     integ = Integrator(scene, Options(accuracy=0.2, bounces=2, samples=128), progress=bar)
     bar.integ = integ
-    integ.attach_cache_file(shared)
+    attach_cache_file(integ, shared)
     integ.compute(points, normals)
 ''')
 
