@@ -26,8 +26,9 @@ __all__ = ["SIZING_VERSION", "scene_fingerprint", "record_settings", "plain_json
 #: cache file made with other rules is refused).  3: light limits from the portals in
 #: closed form inside, zones (docs/architecture.md, "Record domains"); 4: the sun's images
 #: in mirrors and panes are direct light (lbl_illum.engine.sunmirrors); 5: and in polished plastic,
-#: with the sun's highlight on rough plastic seen by hemisphere rays.
-SIZING_VERSION = 5
+#: with the sun's highlight on rough plastic seen by hemisphere rays; 6: images seen through
+#: panes on the way to the reflector count (dimmed by them) instead of being dropped.
+SIZING_VERSION = 6
 
 
 def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:

@@ -10,7 +10,9 @@ illuminance it adds at P is
 X the point where the ray from P along u meets the reflector, ρ(θ) its specular
 reflectance at the sun's angle of incidence (:meth:`MaterialTable.specular`: a mirror's
 ρ, a pane's Fresnel or constant reflectance, plastic's ρ_s(θ)) and T the transmittance
-from X to the sun (0 behind an opaque surface, the product of the panes crossed).  This
+of both legs, P to X and X to the sun (0 behind an opaque surface, else the product of
+τ(θ) of the panes crossed: a light shelf's mirror outside the window lights the ceiling
+through the pane above it).  This
 is the "virtual light source" of Radiance's ``mirror`` material (G. J. Ward, "The RADIANCE
 Lighting Simulation and Rendering System", SIGGRAPH 1994, §2.2), applied here to panes and
 polished plastic as well.
@@ -36,7 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..scene.materials import GLASS, MIRROR, PLASTIC, MaterialTable
-from .raycast import SELF_HIT_EPSILON, Tracer
+from .raycast import MAX_GLASS_LAYERS, SELF_HIT_EPSILON, Tracer, step_past
 
 __all__ = ["SunMirrors", "MAX_PLANES"]
 
@@ -128,11 +130,9 @@ class SunMirrors:
             return E
         s = sun_directions[point]
         u = s - 2.0 * np.einsum("ij,ij->i", s, nrm[plane])[:, None] * nrm[plane]
-        hits = self.tracer.intersect(origins[point], u)
-        ok = hits.hit.copy()
-        ok[ok] = self.plane_of[hits.prim[ok]] == plane[ok]
-        point, plane, side, cos_p, u, s, prim, t_hit = (point[ok], plane[ok], side[ok], cos_p[ok], u[ok], s[ok],
-                                                        hits.prim[ok], hits.t[ok])
+        ok, prim, t_hit, T_near = self._reach_reflector(origins[point], u, plane)
+        point, plane, side, cos_p, u, s, prim, t_hit, T_near = (point[ok], plane[ok], side[ok], cos_p[ok], u[ok],
+                                                                s[ok], prim[ok], t_hit[ok], T_near[ok])
         if len(point) == 0:
             return E
         mat = self.tracer.triangles.material[prim]
@@ -141,10 +141,47 @@ class SunMirrors:
         X = origins[point] + t_hit[:, None] * u
         step = SELF_HIT_EPSILON * (np.abs(X).max(axis=1) + self.tracer.length_scale)
         T = transmittance(X + step[:, None] * back, s)
-        add = direct_normal_illuminance * rho * cos_p[:, None] * T
+        add = direct_normal_illuminance * rho * cos_p[:, None] * T_near * T
         for c in range(3):                      # (in plane order at each point)
             E[:, c] = np.bincount(point, add[:, c], minlength=len(E))
         return E
+
+    def _reach_reflector(self, origins, u, plane):
+        """Follow the rays from the points along u to their reflector planes ``plane``,
+        through any panes on the way.  Returns ``(ok, prim, t, T_near)``: (k,) whether the
+        ray reaches a triangle of its plane, that triangle, the distance [m] to it, and
+        (k, 3) the product of τ(θ) of the panes crossed before it (glass of other planes,
+        :meth:`MaterialTable.glass_transmittance`; Radiance's shadow rays to a virtual
+        source pass through glass likewise).  An opaque surface on the way ends the ray."""
+        k = len(origins)
+        ok = np.zeros(k, bool)
+        prim = np.full(k, -1, np.int64)
+        t_total = np.zeros(k)
+        T_near = np.ones((k, 3))
+        material = self.tracer.triangles.material
+        is_glass = self.materials.kind[material] == GLASS if len(material) else np.zeros(0, bool)
+        live = np.arange(k)
+        o = origins
+        d = u
+        for _ in range(MAX_GLASS_LAYERS + 1):
+            hits = self.tracer.intersect(o, d)
+            hit = hits.hit
+            on_plane = hit.copy()
+            on_plane[hit] = self.plane_of[hits.prim[hit]] == plane[live[hit]]
+            found = live[on_plane]
+            ok[found] = True
+            prim[found] = hits.prim[on_plane]
+            t_total[found] += hits.t[on_plane]
+            past = hit & ~on_plane
+            past[past] = is_glass[hits.prim[past]]                    # a pane of another plane
+            if not past.any():
+                break
+            live, o, d, t, pr = live[past], o[past], d[past], hits.t[past], hits.prim[past]
+            cos_i = np.abs(np.einsum("ij,ij->i", self.tracer.normals[pr], d))
+            T_near[live] *= self.materials.glass_transmittance(material[pr], cos_i)
+            o, step = step_past(o, d, t, self.tracer.length_scale)
+            t_total[live] += step
+        return ok, prim, t_total, T_near
 
 
 @njit(cache=True)

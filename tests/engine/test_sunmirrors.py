@@ -110,3 +110,24 @@ def test_hemisphere_rays_do_not_count_the_suns_image_again():
     u = _sun() * [1, 1, -1]
     _, radiance, _, _ = integ.trace_paths(np.array([[0.0, 0.0, 1.0]]), u[None, :], np.random.default_rng(1))
     assert radiance[0] == pytest.approx([800.0] * 3, rel=1e-6)
+
+
+def test_the_image_seen_through_a_pane_is_dimmed_by_it():
+    """A mirror seen through a pane (a light shelf outside a window, seen from the ceiling):
+    E = E_dn sin(altitude) (ρ_m τ + ρ_p) at a downward sensor above a 0.6 m pane of constant
+    τ = 0.6 that the reflected ray crosses on its way to the floor mirror — the mirror's
+    image through the pane plus the pane's own reflection — to 1e-4.  The pane stays off
+    the mirror's far leg to the sun (1.4 m away)."""
+    s, u = _sun(), _sun() * [1, 1, -1]
+    P = np.array([0.0, 0.0, 1.0])
+    crossing = P + (0.5 / s[2]) * u                               # where the ray meets z = 0.5
+    pane = {"shape": "rectangle", "origin": list(crossing - [0.3, 0.3, 0.0]), "u": [0.6, 0, 0], "v": [0, 0.6, 0],
+            "material": "pane"}
+    scene = make_scene([_floor_mirror(), pane], MATS, sun=SUN)
+    E = compute_illuminance(scene, *_down([P]), DIRECT_ONLY).illuminance
+    expected = 80000.0 * np.sin(np.radians(35.0)) * (0.8 * 0.6 + thin_pane_reflectance(0.6))
+    assert E[0] == pytest.approx(expected, rel=1e-4)
+    # an opaque block in place of the pane still hides the mirror (and shows no image itself)
+    block = dict(pane, material="block")
+    E = compute_illuminance(make_scene([_floor_mirror(), block], MATS, sun=SUN), *_down([P]), DIRECT_ONLY).illuminance
+    assert E[0] == 0.0
