@@ -65,7 +65,7 @@ transport and image synthesis", SIGGRAPH 1990) while the ray count stays bounded
 **Plastic** (Radiance's ``plastic``; :mod:`lbl_illum.scene.materials` gives the model).  A
 hit adds a diffuse hit of weight throughput · ρ_d/π — its diffuse part goes through the
 cache like any diffuse surface — *and* continues as a specular path
-(``_continue_specular``, :meth:`~lbl_illum.scene.materials.MaterialTable.reflect`).  On rough
+(:func:`lbl_illum.engine.paths.follow_paths` with the camera's policy, :meth:`~lbl_illum.scene.materials.MaterialTable.reflect`).  On rough
 plastic the sun, a 6.8e-5 sr disk that a lobe sample would rarely meet, is taken
 directly instead: L += ρ_s f_s(v, s) cos θ_s E_dn T(s) for one direction s drawn
 uniformly in the disk, T the transmittance of a shadow ray toward it (what Radiance's
