@@ -48,7 +48,7 @@ class LevelRecords:
     ``Gt`` (n, 3, 3) float32 [lux/m] and ``W`` (n, 3), writable views of one (n, 8, 3) block (write into
     them, or use :meth:`set_values`; the next lookup uses the new values); and
     ``leak`` (n,) uint32, the sectors in which a record may not be used (see
-    :func:`lbl_illum.engine.hemisphere.leak_sectors`; ``W`` and ``leak`` are used only by an
+    :func:`lbl_illum.engine.hessian.leak_sectors`; ``W`` and ``leak`` are used only by an
     ``anisotropic`` level); ``zone`` (n,) uint8, the zone of each record (a record serves only
     queries of its own zone: inside the windows of a building, or not; see
     :meth:`lbl_illum.engine.portals.PortalSet.zone`); ``record_node`` (n,) int32, the octree node holding each record.  Octree nodes:

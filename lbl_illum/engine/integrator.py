@@ -55,8 +55,9 @@ from numba import njit
 from .cache import IrradianceCache, LevelRecords
 from .context import LightingContext
 from .fingerprint import record_settings, scene_fingerprint
-from .hemisphere import (MAX_ANISOTROPY, cell_counts, cosine_directions, hessian_radii, irradiance_gradients,
-                         irradiance_hessian, leak_sectors, limit_gradients, orthonormal_basis, stratified_directions)
+from .gradients import irradiance_gradients, limit_gradients
+from .hemisphere import cell_counts, cosine_directions, orthonormal_basis, stratified_directions
+from .hessian import MAX_ANISOTROPY, hessian_radii, irradiance_hessian, leak_sectors
 from .lambert import portal_irradiance
 from ..scene.materials import russian_roulette
 from ..options import Options
@@ -84,7 +85,7 @@ SPACING_RATIO = 16.0
 #: Portal samples per primary evaluation, as a fraction of its hemisphere samples.
 PORTAL_SAMPLE_FRACTION = 0.5
 #: Rays that reach the sky count as hits this many times the largest record spacing away
-#: in the Hessian of a record's hemisphere (:func:`~lbl_illum.engine.hemisphere.irradiance_hessian`).
+#: in the Hessian of a record's hemisphere (:func:`~lbl_illum.engine.hessian.irradiance_hessian`).
 HESSIAN_FAR = 1e4
 #: Passes of placement before all remaining uncovered queries are taken at once.
 MAX_PASSES = 64
@@ -595,16 +596,16 @@ class Integrator:
 
     def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n, run: RunPlan):
         """Elliptical record domains (``interpolation = "hessian"``): the Hessian radii of
-        Schwarzhaupt, Jensen & Jarosz (2012; :func:`~lbl_illum.engine.hemisphere.hessian_radii`)
+        Schwarzhaupt, Jensen & Jarosz (2012; :func:`~lbl_illum.engine.hessian.hessian_radii`)
         of the light that shapes the room, sized without the record's own samples of it,
         as :meth:`_light_limit` explains: behind the windows the portals' light in closed
         form, its E raised by the interreflected estimate, and the short radius at most
         the harmonic mean distance R_0 of Eq. 4 (the long one 2 R_0), which the closed form
         knows nothing of; elsewhere the Hessian of the light the record's rays found
-        (:func:`~lbl_illum.engine.hemisphere.irradiance_hessian`: luminance scaled to a mean of
+        (:func:`~lbl_illum.engine.hessian.irradiance_hessian`: luminance scaled to a mean of
         0.99 and raised by 0.01, all 1 where none is known, Radiance 5's rule).  Both
         radii are then limited by :meth:`_light_limit` and clamped, and the leak sectors
-        found (:func:`~lbl_illum.engine.hemisphere.leak_sectors`).  Returns (R, W, leak) with R
+        found (:func:`~lbl_illum.engine.hessian.leak_sectors`).  Returns (R, W, leak) with R
         the long radius.
         """
         r, S = len(P), m * n

@@ -7,7 +7,7 @@ its tangent plane, gives E = L · Σ_edges ½ γ_e (n · ĉ_e) [lux] (Lambert 17
 SIGGRAPH 1995, §3): γ_e the angle the edge subtends, ĉ_e the unit normal of the plane
 through the receiver and the edge.  :func:`lambert_edge` gives one edge's term and its
 first and second derivatives in closed form; the irradiance Hessian of a record's
-hemisphere (:func:`lbl_illum.engine.hemisphere.irradiance_hessian`) and the light of window
+hemisphere (:func:`lbl_illum.engine.hessian.irradiance_hessian`) and the light of window
 portals (:func:`portal_irradiance`) are sums of it.
 """
 
@@ -150,7 +150,7 @@ def portal_irradiance(points: np.ndarray, normals: np.ndarray, tangents, triangl
     (r, 3) unit tangents completing each normal; triangles : (k, 3, 3) [m];
     luminance : (k,) [cd/m²].  Returns (r, 6): E [lux], ∂E/∂t, ∂E/∂b [lux/m], ∂²E/∂t²,
     ∂²E/∂t∂b, ∂²E/∂b² [lux/m²] — the layout of
-    :func:`~lbl_illum.engine.hemisphere.irradiance_hessian`, which :func:`~lbl_illum.engine.hemisphere.hessian_radii` reads.
+    :func:`~lbl_illum.engine.hessian.irradiance_hessian`, which :func:`~lbl_illum.engine.hessian.hessian_radii` reads.
     """
     points = np.ascontiguousarray(points, np.float64)
     r = len(points)

@@ -51,7 +51,7 @@ import numpy as np
 from numba import njit, prange
 
 from .compiled import serial_and_parallel
-from .hemisphere import LEAK_SECTORS
+from .hessian import LEAK_SECTORS
 
 __all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "MIN_ERROR", "LANES", "Layout", "insert_records", "freeze",
            "query_order", "lookup", "covered"]
@@ -362,7 +362,7 @@ def _f32_above(x):
 @njit(cache=True, inline="always")
 def _sector_open(mask, dx, dy, dz, mx, my, mz, Ri):
     """Whether displacement d from a record with unit normal m avoids its leak sectors
-    (:func:`lbl_illum.engine.hemisphere.leak_sectors`: LEAK_SECTORS sectors of the tangent
+    (:func:`lbl_illum.engine.hessian.leak_sectors`: LEAK_SECTORS sectors of the tangent
     plane, from the first tangent of the Duff et al. basis).  A query within 10⁻³ R_i of
     the record's normal line has no direction and is always admitted."""
     sign = 1.0 if mz >= 0.0 else -1.0
@@ -682,7 +682,7 @@ def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accura
     from ever deciding a boundary case.  ``parallel`` runs the queries on numba's
     threads (worth it only for batches of thousands of queries).
 
-    With ``shaped`` (Hessian-based records, :func:`lbl_illum.engine.hemisphere.hessian_radii`)
+    With ``shaped`` (Hessian-based records, :func:`lbl_illum.engine.hessian.hessian_radii`)
     the distance term of Eq. 5 is elliptical, sqrt(|d|² + (d·W_i)²)/R_i with R_i the long
     radius, and a record is not used for queries in its leak sectors.
     """

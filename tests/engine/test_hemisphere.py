@@ -110,7 +110,7 @@ def test_gradient_interpolation_is_exact_on_the_record_and_paper_mode_ignores_gr
 
 
 def test_gradients_stay_finite_and_limited_for_rays_hitting_at_zero_distance():
-    from lbl_illum.engine.hemisphere import irradiance_gradients, limit_gradients
+    from lbl_illum.engine.gradients import irradiance_gradients, limit_gradients
 
     rng = np.random.default_rng(4)
     normals = np.array([[0.0, 0.0, 1.0]])
@@ -149,7 +149,7 @@ def test_hessian_of_a_wall_strip_converges_to_the_analytic_derivatives():
     factor is (1 − x/sqrt(x² + h²))/2), so dE/dx = π/2 h²/(x² + h²)^{3/2} and
     d²E/dx² = −3π/2 x h²/(x² + h²)^{5/2}; along the wall nothing changes.  The tangents
     of a +z normal are +x and +y, and moving by +y moves towards the wall."""
-    from lbl_illum.engine.hemisphere import irradiance_hessian
+    from lbl_illum.engine.hessian import irradiance_hessian
 
     x0, h = 1.0, 2.0
     s = x0 * x0 + h * h
@@ -170,7 +170,7 @@ def test_hessian_of_a_wall_strip_converges_to_the_analytic_derivatives():
 
 def test_hessian_of_an_open_sky_vanishes():
     """Nothing but sky: the irradiance is the same everywhere, so no gradient and no curvature."""
-    from lbl_illum.engine.hemisphere import irradiance_hessian
+    from lbl_illum.engine.hessian import irradiance_hessian
 
     normals, d, _, _ = _wall_strip_hemisphere(1.0, 0.0, 16, 50)
     out = irradiance_hessian(normals, d, np.ones(d.shape[:3]), np.full(d.shape[:3], np.inf), far=1e4)[0]
@@ -181,7 +181,7 @@ def test_hessian_of_an_open_sky_vanishes():
 
 def test_hessian_radii_follow_the_eigenvalues_and_the_gradient():
     """R = sqrt(2/(a|λ|)) along each eigenvector, R ≤ 1/|g·axis|, long ≤ 2 × short."""
-    from lbl_illum.engine.hemisphere import MAX_ANISOTROPY, hessian_radii
+    from lbl_illum.engine.hessian import MAX_ANISOTROPY, hessian_radii
 
     a = 0.1
     theta = 0.3                        # eigenvectors rotated by θ from the tangents
@@ -210,7 +210,7 @@ def test_hessian_radii_follow_the_eigenvalues_and_the_gradient():
 def test_leak_sectors_flag_the_direction_of_a_nearby_wall_only():
     """A wall 0.5 m away along +y (φ = 90° from the first tangent +x): the rays that leave
     low towards it flag the sectors around 90°; out of reach, nothing is flagged."""
-    from lbl_illum.engine.hemisphere import LEAK_SECTORS, leak_sectors
+    from lbl_illum.engine.hessian import LEAK_SECTORS, leak_sectors
 
     m, n = 8, 32
     normals, d, _, t = _wall_strip_hemisphere(0.5, 10.0, m, n)

@@ -23,7 +23,8 @@ def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None, W=None, leak=None):
     front = 0.5 * np.einsum("qrk,qrk->qr", d, qN[:, None, :] + N[None, :, :])
     inside = (err < a) & (front >= -FRONT_TOLERANCE * R[None, :])
     if leak is not None:
-        from lbl_illum.engine.hemisphere import LEAK_SECTORS, orthonormal_basis
+        from lbl_illum.engine.hemisphere import orthonormal_basis
+        from lbl_illum.engine.hessian import LEAK_SECTORS
         t, b = orthonormal_basis(N.astype(np.float64))
         u, v = np.einsum("qrk,rk->qr", d, t), np.einsum("qrk,rk->qr", d, b)
         sector = np.floor(np.arctan2(v, u) * LEAK_SECTORS / (2 * np.pi)).astype(np.int64) % LEAK_SECTORS

@@ -40,7 +40,8 @@ import numpy as np
 
 from lbl_illum import Integrator, Options
 from lbl_illum.engine.cache import LevelRecords
-from lbl_illum.engine.hemisphere import cell_counts, irradiance_gradients, limit_gradients, stratified_directions
+from lbl_illum.engine.gradients import irradiance_gradients, limit_gradients
+from lbl_illum.engine.hemisphere import cell_counts, stratified_directions
 from lbl_illum.engine.integrator import RunStats
 from lbl_illum.photometry import luminance
 from lbl_illum.io.radiance import radiance_programs
