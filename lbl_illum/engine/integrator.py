@@ -312,11 +312,11 @@ class _PortalWeights:
     the openings a ray crosses before its first hit, plus the portal glass it goes
     through if its first hit is one and it is transmitted there."""
 
-    def __init__(self, integ: "Integrator", n: int, normals, S, n_p):
+    def __init__(self, integ: "Integrator", n: int, normals, S, n_p, reach=None):
         self.integ, self.normals, self.S = integ, normals, S
         self.n_p = np.broadcast_to(np.asarray(n_p, np.float64), (n,))     # per ray (0: draws none)
         self.weight = np.ones(n)
-        self.reach = None               # samples on openings: unobstructed up to them
+        self.reach = reach              # samples on openings: unobstructed up to them
         self.p_open = None
 
     def first_hit(self, ray, origins, directions, hits):
@@ -433,12 +433,7 @@ class Integrator:
         and (n,) the MIS weight of each ray (1 unless it went through a portal), which
         the radiance and hit weights do not include.
         """
-        weights = None
-        if portal_mis is not None:
-            weights = _PortalWeights(self, len(origins), *portal_mis[:3])
-        reach = portal_mis[3] if portal_mis is not None and len(portal_mis) > 3 else None
-        if reach is not None:
-            weights.reach = reach
+        weights = None if portal_mis is None else _PortalWeights(self, len(origins), *portal_mis)
         paths = follow_paths(self.context, origins, directions, rng, HEMISPHERE, through=through,
                              portal_weights=weights)
         hits = {"ray": paths.ray, "P": paths.P, "Ns": paths.Ns, "Ng": paths.Ng, "weight": paths.weight}
