@@ -59,7 +59,8 @@ from typing import Any, Mapping
 
 from .errors import InputError, check_keys
 
-__all__ = ["Options", "PRESETS", "DEFAULT_PRESET", "scene_defaults", "BOUNCE_ACCURACY_FACTOR", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
+__all__ = ["Options", "PRESETS", "PRESET_MEASURED", "DEFAULT_PRESET", "INTERPOLATIONS", "MAX_BOUNCES", "scene_defaults",
+           "BOUNCE_ACCURACY_FACTOR", "BOUNCE_ACCURACY_CAP", "BOUNCE_SAMPLE_FACTOR", "MIN_DEEP_SAMPLES"]
 
 #: §3.4: factor on ``a`` per deeper diffuse level ...
 BOUNCE_ACCURACY_FACTOR = 1.4

@@ -8,7 +8,7 @@ from pathlib import Path
 import lbl_illum
 
 PACKAGE = Path(lbl_illum.__file__).resolve().parent
-SHARED = {"errors", "photometry", "options", "optional", "_version"}
+SHARED = {"errors", "photometry", "options", "optional", "_version", "_public"}
 #: What each layer may import of the package besides the shared modules and itself.
 ALLOWED = {
     "shared": set(),

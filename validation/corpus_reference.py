@@ -43,7 +43,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "validation"))
 
 from lbl_illum import Options, compute_illuminance, load_scene, read_points  # noqa: E402
-from lbl_illum.io.files import atomic_write_text  # noqa: E402
+from lbl_illum.io import atomic_write_text  # noqa: E402
 from lbl_illum.photometry import luminance  # noqa: E402
 from studies.corpus_scenes import SKIES, cases, prepare, reference_path  # noqa: E402
 
@@ -94,7 +94,7 @@ def summarise(doc: dict) -> dict:
 
 def specular_plastic(scene) -> bool:
     """Some plastic of the scene has a specular part (it reflects the sun)."""
-    from lbl_illum.scene.materials import PLASTIC
+    from lbl_illum.scene import PLASTIC
 
     table = scene.material_table
     used = np.unique(scene.triangles.material)
@@ -103,7 +103,7 @@ def specular_plastic(scene) -> bool:
 
 def direct_light(scene, P, N) -> np.ndarray:
     """(n,) direct illuminance [lux] at the sensors from the sun and light surfaces."""
-    from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.engine import Integrator
 
     integ = Integrator(scene, options(SEED_BASE - 1))
     if integ.direct.is_dark:
@@ -167,7 +167,7 @@ def compute(scene, sky: str, target: float, minutes: float, max_seeds: int) -> d
 
 def radiance_check(scene, sky: str, doc: dict) -> dict:
     """Radiance's pure Monte Carlo on the exported scene against the reference."""
-    from lbl_illum.io.radiance import illuminance_from_rtrace, radiance_programs
+    from lbl_illum.io import illuminance_from_rtrace, radiance_programs
 
     files, points_file = prepare(scene)
     work = Path(tempfile.mkdtemp(prefix="corpus-rad-"))

@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from lbl_illum import Options, compute_illuminance, load_scene, read_points  # noqa: E402
-from lbl_illum.io.files import atomic_write_text  # noqa: E402
+from lbl_illum.io import atomic_write_text  # noqa: E402
 
 SCENE = ROOT / "examples" / "office" / "scene.toml"
 POINTS = ROOT / "examples" / "office" / "grid.pts"

@@ -19,7 +19,7 @@ import numpy as np
 from ..optional import check as check_optional
 from ..options import Options
 from ..engine.integrator import Integrator
-from ..engine.render import RenderResult, image_options, render
+from ..engine.render import RenderResult, image_options, render_image
 from ..errors import InputError, plural
 from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
@@ -242,7 +242,7 @@ def render_command(args, progress=None) -> int:
                     raise InputError(f"{exc}; images do not use point_samples, so a cache made with them "
                                      "(e.g. --preset medium) is not shared") from None
                 raise
-        result = render(scene, view, width, height, pixel_samples=_arg(args, "pixel_samples", 1) or 1,
+        result = render_image(scene, view, width, height, pixel_samples=_arg(args, "pixel_samples", 1) or 1,
                         progress=bar, integrator=integ)
     finally:
         if progress is None:

@@ -97,7 +97,7 @@ from ..photometry import luminance
 from ..scene.scenefile import Scene
 from ..scene.views import View
 
-__all__ = ["RenderResult", "RenderStats", "render", "trace_view_paths", "image_options", "view_spacing",
+__all__ = ["RenderResult", "RenderStats", "render_image", "trace_view_paths", "image_options", "view_spacing",
            "WEIGHT_LIMIT"]
 
 #: Percentiles of the diffuse hits' coordinates whose box sets an image's record spacing.
@@ -245,7 +245,7 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
 # The image
 # ---------------------------------------------------------------------------
 
-def render(scene: Scene, view: View, width: int, height: int, options: Options | None = None,
+def render_image(scene: Scene, view: View, width: int, height: int, options: Options | None = None,
            pixel_samples: int = 1, cache: IrradianceCache | None = None, progress=None,
            integrator: Integrator | None = None) -> RenderResult:
     """Render the luminance image [cd/m²] of ``view``, ``width`` × ``height`` pixels.

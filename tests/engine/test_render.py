@@ -34,7 +34,7 @@ from lbl_illum.errors import InputError
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.scene.materials import plastic_fresnel, thin_pane_reflectance, ward_brdf
 from lbl_illum.cli.render import render_command, resolve_view
-from lbl_illum.engine.render import WEIGHT_LIMIT, image_options, render, trace_view_paths, view_spacing
+from lbl_illum.engine.render import WEIGHT_LIMIT, image_options, render_image, trace_view_paths, view_spacing
 from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
 from lbl_illum.scene.views import View, view_from_string
 
@@ -86,7 +86,7 @@ def sun_direction():
 def test_diffuse_plane_under_sky_and_sun_is_rho_E_over_pi():
     scene = plane_scene(reflectance=0.5)
     view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 -0.6 -vh 60 -vv 40")
-    result = render(scene, view, 24, 16, QUICK, pixel_samples=2)
+    result = render_image(scene, view, 24, 16, QUICK, pixel_samples=2)
     E = E_H + E_DN * math.sin(math.radians(SUN_ALT))
     assert result.rgb.shape == (16, 24, 3) and result.rgb.dtype == np.float32
     assert result.valid.all()
@@ -101,13 +101,13 @@ def test_diffuse_plane_under_sky_and_sun_is_rho_E_over_pi():
 
 def test_sky_seen_directly_and_sun_disk_luminance():
     scene = plane_scene()
-    up = render(scene, view_from_string("-vtv -vp 0 0 1.5 -vd 0 0 1 -vu 0 1 0 -vh 60 -vv 60"), 8, 8, QUICK)
+    up = render_image(scene, view_from_string("-vtv -vp 0 0 1.5 -vd 0 0 1 -vu 0 1 0 -vh 60 -vv 60"), 8, 8, QUICK)
     np.testing.assert_allclose(up.rgb, E_H / np.pi, rtol=1e-6)
     assert up.stats.diffuse_hits == 0 and up.stats.new_records in ([], [0, 0, 0])
     # a 0.2° view centred on the sun lies inside its 0.53° disk: sky + E_dn/Ω everywhere
     s = sun_direction()
     at_sun = View("v", (0, 0, 1.5), tuple(s), (0, 0, 1), 0.2, 0.2)
-    result = render(scene, at_sun, 6, 6, QUICK, pixel_samples=3)
+    result = render_image(scene, at_sun, 6, 6, QUICK, pixel_samples=3)
     np.testing.assert_allclose(result.rgb, E_H / np.pi + E_DN / SUN_SOLID_ANGLE, rtol=1e-6)
 
 
@@ -115,7 +115,7 @@ def test_sky_seen_directly_and_sun_disk_luminance():
 def test_mirror_shows_the_sky_times_its_reflectance(rho):
     scene = plane_scene("mirror", rho, with_sun=False)
     view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 -0.8 -vh 40 -vv 30")
-    result = render(scene, view, 16, 12, QUICK)
+    result = render_image(scene, view, 16, 12, QUICK)
     np.testing.assert_allclose(result.rgb, rho * E_H / np.pi, rtol=1e-6)
     assert result.stats.diffuse_hits == 0
 
@@ -143,7 +143,7 @@ def test_sky_through_a_constant_pane(reflectance):
     scene = pane_scene(reflectance, tau)
     rho = thin_pane_reflectance(tau) if reflectance is None else 0.0
     view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 0.4 -vh 40 -vv 30")
-    result = render(scene, view, 16, 12, QUICK)
+    result = render_image(scene, view, 16, 12, QUICK)
     np.testing.assert_allclose(result.rgb, (tau + rho) * E_H / np.pi, rtol=1e-6)
     # overcast sky along given rays: the reflected direction has the same altitude
     scene = pane_scene(reflectance, tau, overcast_sky())
@@ -197,12 +197,12 @@ def test_light_surface_seen_directly_and_edge_pixels_are_sample_means():
     geo = [{"shape": "rectangle", "origin": [0.5, -10, 0], "u": [20, 0, 0], "v": [0, 20, 0], "material": "lamp"}]
     scene = make_scene(geo, {"lamp": {"type": "light", "luminance": 1000.0}}, {"type": "none"})
     view = view_from_string("-vtl -vp 0 0 5 -vd 0 0 -1 -vu 0 1 0 -vh 8 -vv 8")
-    result = render(scene, view, 8, 8, QUICK, pixel_samples=16)
+    result = render_image(scene, view, 8, 8, QUICK, pixel_samples=16)
     lum = result.luminance
     np.testing.assert_allclose(lum[:, :4], 0.0)
     np.testing.assert_allclose(lum[:, 4], 500.0, rtol=1e-6)
     np.testing.assert_allclose(lum[:, 5:], 1000.0, rtol=1e-6)
-    one = render(scene, view, 8, 8, QUICK, pixel_samples=1).luminance   # jittered: 0 or 1000
+    one = render_image(scene, view, 8, 8, QUICK, pixel_samples=1).luminance   # jittered: 0 or 1000
     assert set(np.unique(one[:, 4]).tolist()) <= {0.0, 1000.0}
 
 
@@ -211,7 +211,7 @@ def test_fisheye_corners_are_invalid_and_zero():
     (A 180° angular fisheye's corners are valid rays looking behind, as in rpict.)"""
     scene = plane_scene(with_sun=False)
     view = view_from_string("-vth -vp 0 0 1.5 -vd 0 0 1 -vu 0 1 0 -vh 180 -vv 180")
-    result = render(scene, view, 16, 16, QUICK, pixel_samples=4)
+    result = render_image(scene, view, 16, 16, QUICK, pixel_samples=4)
     assert not result.valid[0, 0] and not result.valid[-1, -1] and result.valid[8, 8]
     assert np.all(result.rgb[~result.valid] == 0.0)
     # every valid sample looks at the sky (above the horizon): pixel = mean of valid samples
@@ -222,7 +222,7 @@ def test_fisheye_corners_are_invalid_and_zero():
 def test_aft_clipping_is_black_beyond_the_plane():
     scene = plane_scene(with_sun=False)
     view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 1 -0.6 -vh 40 -vv 20 -va 0.5")
-    result = render(scene, view, 8, 4, QUICK)
+    result = render_image(scene, view, 8, 4, QUICK)
     assert np.all(result.rgb == 0.0) and result.stats.diffuse_hits == 0
 
 
@@ -238,11 +238,11 @@ def test_integrating_sphere_walls_match_the_closed_form(rho):
     f = (r / R) ** 2
     q = rho * (1 - f)
     E = math.pi * L * f * (1 - q ** (bounces + 1)) / (1 - q)
-    walls = render(scene, view_from_string("-vtv -vp 0 0 0.5 -vd 1 0 0.2 -vh 60 -vv 60"), 32, 32, opts)
+    walls = render_image(scene, view_from_string("-vtv -vp 0 0 0.5 -vd 1 0 0.2 -vh 60 -vv 60"), 32, 32, opts)
     assert walls.stats.diffuse_hits == 32 * 32
     mean = float(walls.luminance.mean())
     assert abs(mean / (rho * E / math.pi) - 1) < 0.04, (mean, rho * E / math.pi)
-    lamp = render(scene, view_from_string("-vtv -vp 0 0 0.5 -vd 0 0 -1 -vu 0 1 0 -vh 5 -vv 5"), 4, 4, opts,
+    lamp = render_image(scene, view_from_string("-vtv -vp 0 0 0.5 -vd 0 0 -1 -vu 0 1 0 -vh 5 -vv 5"), 4, 4, opts,
                   cache=walls.cache)
     np.testing.assert_allclose(lamp.rgb, L, rtol=1e-6)
 
@@ -331,7 +331,7 @@ def test_polished_plastic_image_under_a_uniform_sky():
     diffuse part goes through the cache like a diffuse surface's."""
     s, C = 0.05, np.array([0.2, 0.5, 0.8])
     view = view_from_string("-vtv -vp 0 0 1.5 -vd 0 0.8660254 -0.5 -vh 0.5 -vv 0.5")
-    result = render(plastic_scene(s, 0.0), view, 8, 8, QUICK)
+    result = render_image(plastic_scene(s, 0.0), view, 8, 8, QUICK)
     rho_s = s + (math.exp(-5.85 * 0.5) - 0.00202943064) * (1 - s)
     expected = ((1 - rho_s) * C + rho_s) * E_H / np.pi
     # ρ_s(θ) changes by ±0.0012 across the ±0.25° of the view: ±0.4 % of the red channel
@@ -360,7 +360,7 @@ UP = np.tile([0.0, 0.0, 1.0], (49, 1))
 
 def test_records_go_only_where_the_view_needs_them():
     scene = two_rooms()
-    result = render(scene, view_from_string(ROOM_VIEW), 24, 20, QUICK)
+    result = render_image(scene, view_from_string(ROOM_VIEW), 24, 20, QUICK)
     assert result.stats.records_made == sum(result.stats.records) > 0
     for lv in result.cache.levels:
         P = lv.P[:lv.count]
@@ -374,20 +374,20 @@ def test_a_render_and_an_illuminance_run_share_records_both_ways():
     opts = image_options(QUICK)
     view = view_from_string(ROOM_VIEW)
     fresh_grid = Integrator(scene, opts).compute(FLOOR, UP).stats
-    fresh_image = render(scene, view, 24, 20, opts).stats
+    fresh_image = render_image(scene, view, 24, 20, opts).stats
     # render first, then the grid on its cache: the grid makes fewer records
-    image = render(scene, view, 24, 20, opts)
+    image = render_image(scene, view, 24, 20, opts)
     grid = Integrator(scene, opts, cache=image.cache).compute(FLOOR, UP).stats
     assert grid.cache_hits > 0 and grid.primary_evaluations < fresh_grid.primary_evaluations
     # the grid first, then the image on its cache
     integ = Integrator(scene, opts)
     integ.compute(FLOOR, UP)
     before = sum(integ.cache.record_counts)
-    again = render(scene, view, 24, 20, opts, cache=integ.cache)
+    again = render_image(scene, view, 24, 20, opts, cache=integ.cache)
     assert again.stats.cache_hits > 0 and again.stats.records_made < fresh_image.records_made
     assert sum(again.stats.records) == before + again.stats.records_made
     # a rerun on its own cache makes nothing and gives the same picture
-    rerun = render(scene, view, 24, 20, opts, cache=again.cache)
+    rerun = render_image(scene, view, 24, 20, opts, cache=again.cache)
     assert rerun.stats.records_made == 0
     np.testing.assert_array_equal(rerun.rgb, again.rgb)
 
@@ -396,7 +396,7 @@ def test_point_samples_are_not_used_for_images():
     opts = Options(accuracy=0.2, samples=64, bounces=2, point_samples=512)
     assert image_options(opts).point_samples is None
     scene = two_rooms()
-    result = render(scene, view_from_string(ROOM_VIEW), 8, 6, opts)
+    result = render_image(scene, view_from_string(ROOM_VIEW), 8, 6, opts)
     assert result.options.point_samples is None
     assert result.stats.new_records[0] < result.stats.diffuse_hits
 

@@ -931,7 +931,7 @@ def prepare_furnished(build: Path, triangles: int, remake: bool, minutes: float,
         if len(doc["illuminance"]) != len(points) or doc.get("triangles") != len(scene.triangles):
             say(f"{path.name} does not match the generated scene: remaking it")
             doc = None
-    from lbl_illum.io.files import atomic_write_text
+    from lbl_illum.io import atomic_write_text
 
     if doc is None:
         doc = make_furnished_reference(scene, points, normals, folder, minutes, programs, say)
@@ -1083,7 +1083,7 @@ def radiance_difference(scene, points, normals, folder: Path, programs, referenc
 
 def radiance_check(scene, points, normals, folder: Path, programs) -> dict:
     """One Radiance run at ``RADIANCE_CHECK`` on a fresh export: illuminance [lux], seconds."""
-    from lbl_illum.io.radiance import export_radiance, illuminance_from_rtrace
+    from lbl_illum.io import export_radiance, illuminance_from_rtrace
 
     ex = export_radiance(scene, folder, points, normals, glass="brtdfunc")
     oconv = _program(ex.oconv_command(), programs)
@@ -1105,7 +1105,7 @@ def _program(cmd: list[str], programs: dict) -> list[str]:
 
 def _env(programs: dict, export) -> dict:
     """Radiance's environment with the export folder first on RAYPATH."""
-    from lbl_illum.io.radiance import radiance_programs
+    from lbl_illum.io import radiance_programs
 
     found = radiance_programs(export.directory)
     return found["env"] if found is not None else programs["env"]
@@ -1132,7 +1132,7 @@ class Runner:
         """Export the scene (glass as BRTDfunc), compile the octree; the cube size,
         export and oconv seconds."""
         from lbl_illum import load_scene
-        from lbl_illum.io.radiance import export_radiance
+        from lbl_illum.io import export_radiance
 
         b = self.bench
         scene = load_scene(b.scene_path)
@@ -1174,7 +1174,7 @@ class Runner:
         if m.returncode != 0:
             row.update(failed=True, error=failure(m), elapsed=m.seconds)
             return row
-        from lbl_illum.io.radiance import illuminance_from_rtrace
+        from lbl_illum.io import illuminance_from_rtrace
 
         values = illuminance_from_rtrace(m.stdout.decode())
         records = 0
@@ -1742,7 +1742,7 @@ def compare(args) -> int:
         return 0
     from tqdm import tqdm
 
-    from lbl_illum.io.radiance import radiance_programs
+    from lbl_illum.io import radiance_programs
 
     t_start = time.perf_counter()
     build = Path(args.build)

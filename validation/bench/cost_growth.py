@@ -141,7 +141,7 @@ def measure(case: dict) -> dict:
     """One timed calculation; ``case`` = {scene, points (None: the scene's grid.pts) or n,
     options (dict)}.  Returns seconds of each stage, records, rays and peak memory."""
     from lbl_illum import Options, load_scene, read_points
-    from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.engine import Integrator
 
     options = Options(**case["options"])
     # warm-up on the bare office: numba kernels loaded or compiled, thread pool started

@@ -54,8 +54,7 @@ import numba
 
 from lbl_illum import Options, load_scene, read_points
 from lbl_illum.options import PRESETS
-from lbl_illum.engine.integrator import Integrator
-from lbl_illum.engine.raycast import thread_count
+from lbl_illum.engine import Integrator, thread_count
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_SCENE = ROOT / "examples" / "office" / "scene.toml"

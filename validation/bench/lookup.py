@@ -51,8 +51,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from lbl_illum.engine.cache import LevelRecords
-from lbl_illum.io.files import atomic_write_bytes, atomic_write_text
+from lbl_illum.engine import LevelRecords
+from lbl_illum.io import atomic_write_bytes, atomic_write_text
 
 #: Records per ``add`` call while filling a level.
 INSERT_BATCH = 10_000

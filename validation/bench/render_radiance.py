@@ -125,7 +125,7 @@ def engine_options(setting: dict):
     """Our image options for one ``SETTINGS`` entry (the scene's settings, the preset, then
     the explicit fields, without point_samples)."""
     from lbl_illum import load_scene
-    from lbl_illum.engine.render import image_options
+    from lbl_illum.engine import image_options
 
     scene = load_scene(SCENE)
     fields = dict(setting)
@@ -136,7 +136,7 @@ def engine_options(setting: dict):
 
 def rpict_options(options, max_spacing: float, cube: float, lr: int = RPICT_LR) -> list[str]:
     """rpict's ambient options matched to ours (module text)."""
-    from lbl_illum.io.radiance import ambient_options
+    from lbl_illum.io import ambient_options
 
     return ambient_options(options, max_spacing, cube) + ["-lr", str(lr)]
 
@@ -150,8 +150,8 @@ def centre_hits(scene, view, width: int, height: int) -> dict:
     material, whether diffuse, and the mask of pixels whose 3 × 3 block sees one plane
     of one diffuse material (module text).  Arrays are (height, width, ...)."""
     from lbl_illum import Options
-    from lbl_illum.engine.integrator import Integrator
-    from lbl_illum.scene.materials import DIFFUSE
+    from lbl_illum.engine import Integrator
+    from lbl_illum.scene import DIFFUSE
 
     integ = Integrator(scene, Options(accuracy=0.0, samples=4, bounces=0))
     origins, directions, valid = view.rays(width, height)           # no rng: pixel centres
@@ -207,7 +207,7 @@ def reference_luminance(scene, hits: dict, pixels: np.ndarray, samples: int, see
     """Pure Monte Carlo luminance L = ρ/π · E [cd/m²] at the pixels' centre hits, mean
     and standard error over ``seeds``."""
     from lbl_illum import Options
-    from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.engine import Integrator
 
     r, c = pixels[:, 0], pixels[:, 1]
     P, N, rho = hits["P"][r, c], hits["N"][r, c], hits["rho"][r, c]
@@ -236,21 +236,21 @@ def worker(spec_path: str) -> int:
         os.sched_setaffinity(0, {int(spec["cpu"])})
     t0 = time.perf_counter()
     from lbl_illum import Options, load_scene
-    from lbl_illum.engine.render import render
-    from lbl_illum.scene.views import view_from_string
+    from lbl_illum.engine import render_image
+    from lbl_illum.scene import view_from_string
 
     scene = load_scene(spec["scene"])
     view = view_from_string(spec["view"])
     options = Options(**spec["options"])
     t1 = time.perf_counter()
     # warm-up at the same size (the parallel kernels and their compilation) at cheap settings
-    render(scene, view, spec["width"], spec["height"],
+    render_image(scene, view, spec["width"], spec["height"],
            Options(accuracy=0.3, samples=16, bounces=2, interpolation=options.interpolation, seed=99))
     t2 = time.perf_counter()
     times = []
     for _ in range(max(1, int(spec.get("repeat", 1)))):       # each a fresh integrator and cache
         t = time.perf_counter()
-        result = render(scene, view, spec["width"], spec["height"], options)
+        result = render_image(scene, view, spec["width"], spec["height"], options)
         times.append(time.perf_counter() - t)
     np.save(spec["output"], result.luminance.astype(np.float64))
     st = result.stats
@@ -289,7 +289,7 @@ def run_ours(options, width: int, height: int, folder: Path, threads: int, tag: 
 
 def prepare_radiance(scene, folder: Path, programs) -> dict:
     """Export the office, compile the octree; the export, its environment and the cube size [m]."""
-    from lbl_illum.io.radiance import export_radiance, radiance_programs
+    from lbl_illum.io import export_radiance, radiance_programs
 
     target = folder / "radiance"
     if target.exists():
@@ -367,7 +367,7 @@ def radiance_mc(rad: dict, programs, hits: dict, pixels: np.ndarray) -> dict:
     if proc.returncode != 0:
         raise RuntimeError(f"rtrace: {proc.stderr[-300:]}")
     rgb = np.array(proc.stdout.split(), np.float64).reshape(-1, 3)
-    from lbl_illum.io.radiance import RADIANCE_RGB_WEIGHTS
+    from lbl_illum.io import RADIANCE_RGB_WEIGHTS
 
     return {"L": 179.0 * rgb @ np.array(RADIANCE_RGB_WEIGHTS), "seconds": seconds,
             "command": "rtrace -h -ov -n 2 " + " ".join(RADIANCE_MC) + " scene.oct"}
@@ -498,8 +498,8 @@ def main(argv=None) -> int:
     if args.worker:
         return worker(args.worker)
     from lbl_illum import load_scene
-    from lbl_illum.io.radiance import radiance_programs
-    from lbl_illum.scene.views import view_from_string
+    from lbl_illum.io import radiance_programs
+    from lbl_illum.scene import view_from_string
 
     programs = radiance_programs()
     if programs is None:
@@ -620,7 +620,7 @@ def sensor_check(scene, hits: dict, pixels: np.ndarray, ref: np.ndarray, options
     with gradient interpolation: L = ρ/π · E against the reference."""
     import dataclasses
 
-    from lbl_illum.engine.integrator import Integrator
+    from lbl_illum.engine import Integrator
 
     r, c = pixels[:, 0], pixels[:, 1]
     P, N, rho = hits["P"][r, c], hits["N"][r, c], hits["rho"][r, c]
@@ -706,7 +706,7 @@ def write_report(args, results: dict, rows, mask, pixels, seconds: float) -> Pat
         "`-ab 9` at 7 bounces (see Findings).",
         "Glass: " + ("the export wrote the office's constant glazing as a BRTDfunc with constant coefficients, "
                      "our glass exactly." if results["glass_brtdfunc"] else "not a BRTDfunc (check the export)."),
-        "Ours: `lbl_illum.engine.render.render` with the options shown, 1 jittered sample per pixel; the 1-thread run "
+        "Ours: `lbl_illum.engine.render_image` with the options shown, 1 jittered sample per pixel; the 1-thread run "
         "with LBL_ILLUM_THREADS=1, NUMBA_NUM_THREADS=1, pinned to one core.",
     ])
     report.heading("Pixels compared and the reference")

@@ -43,11 +43,10 @@ import numpy as np
 
 from lbl_illum import Integrator, Options
 from lbl_illum.errors import InputError, plural
-from lbl_illum.engine.hemisphere import cell_counts
+from lbl_illum.engine import ON_SURFACE_FRACTION, SELF_HIT_EPSILON, cell_counts
 from lbl_illum.options import BOUNCE_ACCURACY_CAP
-from lbl_illum.engine.raycast import ON_SURFACE_FRACTION, SELF_HIT_EPSILON
-from lbl_illum.scene.scenefile import scene_from_dict
-from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
+from lbl_illum.scene import scene_from_dict
+from lbl_illum.daylight import SUN_SOLID_ANGLE
 
 from .report import Report, StudyContext, fmt, pct
 
@@ -424,7 +423,7 @@ def degenerate_meshes():
     x = 0, shares the floor–wall edge, which so has three faces: a non-manifold mesh.
     ``dirty`` adds 2 zero-area triangles (three collinear corners; three equal corners)
     and 3 duplicates of the first triangle (same order, reversed, rotated)."""
-    from lbl_illum.scene.geometry import rectangle_triangles
+    from lbl_illum.scene import rectangle_triangles
 
     tris = [rectangle_triangles(e["origin"], e["u"], e["v"]) for e in room_geometry()]
     fin = rectangle_triangles([0, 0, 0], [0, ROOM[1], 0], [0.7071, 0, 0.7071])

@@ -16,7 +16,7 @@ looks down on the table from the south-east.
 
 **What is measured.**
 
-1. The image with the cache (:func:`lbl_illum.engine.render.render`, one jittered sample
+1. The image with the cache (:func:`lbl_illum.engine.render_image`, one jittered sample
    per pixel) and its rays R.
 2. Pure Monte Carlo (``accuracy = 0``: every pixel's hit gets its own Eq. 2
    hemisphere of S rays, deeper bounces one path ray each) with S chosen so that its
@@ -43,12 +43,10 @@ from pathlib import Path
 import numpy as np
 
 from lbl_illum import Options
-from lbl_illum.io.images import preview_pixels
-from lbl_illum.engine.integrator import Integrator
+from lbl_illum.io import preview_pixels
+from lbl_illum.engine import Integrator, image_options, render_image
 from lbl_illum.photometry import luminance
-from lbl_illum.engine.render import image_options, render
-from lbl_illum.scene.scenefile import scene_from_dict
-from lbl_illum.scene.views import View
+from lbl_illum.scene import View, scene_from_dict
 
 from .report import Report, StudyContext, fmt, new_figure, pct
 
@@ -189,7 +187,7 @@ def record_distribution(cache, level0_hits: np.ndarray) -> dict:
 # -- the study --------------------------------------------------------------------------
 def _render(sc, opts, plan, seed, cache=None):
     t0 = time.perf_counter()
-    result = render(sc, VIEW, plan["width"], plan["height"], opts.replace(seed=seed), cache=cache)
+    result = render_image(sc, VIEW, plan["width"], plan["height"], opts.replace(seed=seed), cache=cache)
     result.stats.seconds = time.perf_counter() - t0
     return result
 

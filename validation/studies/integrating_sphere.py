@@ -75,11 +75,10 @@ from pathlib import Path
 import numpy as np
 
 from lbl_illum import Integrator, Options
-from lbl_illum.scene.geometry import sphere_triangles
-from lbl_illum.engine.integrator import QUERY_LIGHT_SAMPLES
+from lbl_illum.scene import scene_from_dict, sphere_triangles
+from lbl_illum.engine import QUERY_LIGHT_SAMPLES
 from lbl_illum.options import BOUNCE_ACCURACY_CAP, BOUNCE_ACCURACY_FACTOR, MIN_DEEP_SAMPLES
 from lbl_illum.photometry import luminance
-from lbl_illum.scene.scenefile import scene_from_dict
 
 from .report import Report, StudyContext, fmt, new_figure, pct
 

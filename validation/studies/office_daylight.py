@@ -64,7 +64,7 @@ from lbl_illum import compute_illuminance, load_scene, read_points
 from lbl_illum.errors import InputError
 from lbl_illum.options import DEFAULT_PRESET, PRESET_MEASURED
 from lbl_illum.photometry import luminance
-from lbl_illum.io.radiance import export_radiance, illuminance_from_rtrace, radiance_programs, to_radiance
+from lbl_illum.io import export_radiance, illuminance_from_rtrace, radiance_programs, to_radiance
 
 from . import repository_root
 from .report import Report, StudyContext, error_summary, fmt, new_figure, pct

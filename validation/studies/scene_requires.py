@@ -41,10 +41,9 @@ except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
 from lbl_illum import Integrator, Options, read_points
-from lbl_illum.engine.cache import LevelRecords
+from lbl_illum.engine import LevelRecords, Tracer
 from lbl_illum.errors import InputError
-from lbl_illum.engine.raycast import Tracer
-from lbl_illum.scene.scenefile import scene_from_dict
+from lbl_illum.scene import scene_from_dict
 
 from . import repository_root
 from .report import Report, StudyContext, fmt, new_figure, pct

@@ -55,7 +55,7 @@ import numpy as np
 
 from lbl_illum import compute_illuminance
 from lbl_illum.options import DEFAULT_PRESET, scene_defaults
-from lbl_illum.scene.scenefile import scene_from_dict
+from lbl_illum.scene import scene_from_dict
 
 from .report import Report, StudyContext, fmt, new_figure, pct
 

@@ -39,14 +39,11 @@ import numba
 import numpy as np
 
 from lbl_illum import Integrator, Options
-from lbl_illum.engine.cache import LevelRecords
-from lbl_illum.engine.gradients import irradiance_gradients, limit_gradients
-from lbl_illum.engine.hemisphere import cell_counts, stratified_directions
-from lbl_illum.engine.integrator import RunStats
+from lbl_illum.engine import LevelRecords, RunStats, cell_counts, irradiance_gradients, limit_gradients, stratified_directions
 from lbl_illum.photometry import luminance
-from lbl_illum.io.radiance import radiance_programs
-from lbl_illum.scene.scenefile import scene_from_dict
-from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
+from lbl_illum.io import radiance_programs
+from lbl_illum.scene import scene_from_dict
+from lbl_illum.daylight import SUN_SOLID_ANGLE
 
 from . import sphere_plane_reference as ref
 from .report import Report, StudyContext, error_summary, fmt, new_figure, pct
