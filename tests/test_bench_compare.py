@@ -545,3 +545,34 @@ def test_corpus_report_has_a_section_and_a_summary(tiny_case, tmp_path):
     assert doc["corpus_verdicts"] == {"tiny-overcast": "met"} and doc["corpus_skipped"] == {"cabin-sunny":
                                                                                               "no reference yet"}
     assert doc["corpus"]["tiny-overcast"]["runs"][0]["compute_seconds"] == 0.5
+
+
+def test_merge_keeps_the_cases_a_run_does_not_measure(tiny_case, tmp_path, monkeypatch):
+    """--merge: a case of the earlier report comes back with its runs and the date it was
+    measured; a case measured now replaces the stored one; a changed reference or other
+    processes refuse the stored case."""
+    import json
+
+    bench, folder = tiny_case
+    runs = [{"program": "lbl_illum", "family": "preset", "label": "preset draft", "seconds": 2.0,
+             "process_seconds": 2.0, "compute_seconds": 1.0, "maxrss_kib": 1024, "mean_error": 0.015,
+             "max_error": 0.03, "bias": 0.01, "records": 1, "rays": 1}]
+    res = {"runs": runs, "fronts": {}, "measured": "2026-11-30"}
+    args = SimpleNamespace(out_display="OUT", scenes_given=True, scenes="corpus:tiny-overcast", quick=False,
+                           run_timeout=cr.RUN_TIMEOUT, processes=2, memory_limit=6.0, merge=False)
+    out = cr.write_report(tmp_path / "out", [bench], {bench.name: res}, args, None, 1.0)
+    path = out / "results.json"
+    monkeypatch.setattr(cr, "prepare_corpus", lambda case: bench if case == "tiny-overcast" else "gone")
+    (kept_bench, kept), = cr.merge_corpus_cases(path, args, {}, {})
+    assert kept_bench is bench and kept["runs"] == runs and kept["measured"] == "2026-11-30"
+    assert "reference_illuminance" not in kept and "title" not in kept
+    assert cr.merge_corpus_cases(path, args, {"tiny-overcast": {}}, {}) == []       # measured again now
+    assert cr.merge_corpus_cases(tmp_path / "none.json", args, {}, {}) == []
+    with pytest.raises(RuntimeError, match="--processes 2 .* this run uses 1"):
+        cr.merge_corpus_cases(path, SimpleNamespace(processes=1, run_timeout=cr.RUN_TIMEOUT), {}, {})
+    doc = json.loads(path.read_text())
+    doc["results"]["corpus"]["tiny-overcast"]["reference_illuminance"][0] = 7999.0
+    path.write_text(json.dumps(doc))
+    assert cr.merge_corpus_cases(path, args, {}, {}) == []                          # reference changed
+    with pytest.raises(SystemExit):
+        cr.parse_args(["--scenes", "office", "--merge"])

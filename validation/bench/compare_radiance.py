@@ -93,12 +93,14 @@ Usage (from the repository root)::
         [--scenes office,sphere-plane,furnished] [--quick] [--list]
         [--triangles 1000000] [--remake-reference] [--memory-limit 6]
     python validation/bench/compare_radiance.py --scenes corpus [--run-timeout 1200]
+    python validation/bench/compare_radiance.py --scenes corpus:NAME-SKY,... --merge
 
 writes ``OUT/radiance-comparison/`` (report.md, report.html, one plot per scene,
 results.json; ``radiance-comparison-corpus/`` for corpus cases only), whole or not at
 all.  ``--quick``: two or three settings per program on the office only, or two per
 program on the corpus cases named (under a minute on an idle machine; the full run
-about two hours, the whole corpus several more).  ``--list``: print the ladders and exit.  Without
+about two hours, the whole corpus several more).  ``--merge``: keep the cases of the
+existing corpus report that this run does not measure (the corpus measured in parts).  ``--list``: print the ladders and exit.  Without
 ``pyradiance`` (or ``oconv`` and ``rtrace`` on the PATH) only our side runs, and the
 report says so.
 """
@@ -1462,21 +1464,23 @@ def corpus_summary(report, benches: Sequence[Bench], results: dict, skipped: dic
         if comp:
             cells = [ratio_text(c) + ("" if c["verdict"] in ("met", "n/a") else f" ({c['verdict']})")
                      for c in comp["command"]]
-            rows.append([b.name, b.reference_info.get("role", ""), se] + cells + [res["verdict"]])
+            rows.append([b.name, b.reference_info.get("role", ""), se] + cells + [res["verdict"],
+                                                                                  res.get("measured", "—")])
         else:
             why = "Radiance did not run" if not radiance else (res.get("radiance_error") or "no comparison")
             rows.append([b.name, b.reference_info.get("role", ""), se] + ["—"] * len(CORPUS_ERROR_LEVELS)
-                        + [why[:60]])
+                        + [why[:60], res.get("measured", "—")])
     for case, why in skipped.items():
-        rows.append([case, "", "—"] + ["—"] * len(CORPUS_ERROR_LEVELS) + [f"skipped: {why}"])
+        rows.append([case, "", "—"] + ["—"] * len(CORPUS_ERROR_LEVELS) + [f"skipped: {why}", "—"])
     if rows:
         report.table(["case", "role", "ref. SE"] + [f"ratio at {pct(level, 1)}" for level in CORPUS_ERROR_LEVELS]
-                     + ["target"], rows,
+                     + ["target", "measured"], rows,
                      caption=f"Corpus: our time / Radiance's at equal mean relative error, each the whole time a "
                              f"user waits (our command; oconv + rtrace).  Target: ≤ {TARGET_RATIO:g} at every level "
                              "Radiance reaches; “Radiance not reached”: none of its runs gets there (the level does "
                              "not count), “lbl_illum not reached”: ours does not (a miss).  ref. SE: the "
-                             "reference's mean relative standard error.")
+                             "reference's mean relative standard error; measured: the date of the run that "
+                             "measured the case (all of a case's runs, ours and Radiance's, come from that one run).")
     verdicts = [results[b.name].get("verdict") for b in benches if results[b.name].get("comparison")]
     if verdicts:
         counts = {v: verdicts.count(v) for v in ("met", "missed", "undetermined", "n/a") if verdicts.count(v)}
@@ -1496,7 +1500,9 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
     corpus = [b for b in benches if b.kind == CORPUS]
     name = CORPUS_NAME if (corpus or skipped) and not classic else NAME
     command = "python validation/bench/compare_radiance.py --out " + str(args.out_display)
-    if args.scenes_given:
+    if args.scenes_given and getattr(args, "merge", False):        # the one run that measures them all
+        command += " --scenes " + ",".join(CORPUS_PREFIX + b.name for b in corpus)
+    elif args.scenes_given:
         command += " --scenes " + (args.scenes if corpus or skipped else ",".join(b.name for b in benches))
     if args.quick:
         command += " --quick"
@@ -1524,6 +1530,11 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
                                                           if args.quick else "the full ladders."))
     if corpus or skipped:
         corpus_summary(report, corpus, results, skipped, programs is not None)
+        dates = sorted({results[b.name].get("measured", "—") for b in corpus})
+        if len(dates) > 1:
+            report.text(f"The cases were measured in separate runs ({', '.join(dates)}; `--merge` keeps the cases "
+                        "a run does not measure): each case's ratios come from one run, in which ours and "
+                        "Radiance's alternate, but ratios of different cases may come from different runs.")
         report.text(
             f"Corpus target: at every mean error level Radiance reaches among "
             f"{', '.join(pct(x, 1) for x in CORPUS_ERROR_LEVELS)}, the whole `lbl-illum illuminance` command takes "
@@ -1675,6 +1686,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                         help=f"stop a run after S seconds and report it failed (default {RUN_TIMEOUT:g})")
     parser.add_argument("--memory-limit", type=float, default=MEMORY_LIMIT_GIB, metavar="GIB",
                         help=f"stop a run holding more than GIB GiB resident (default {MEMORY_LIMIT_GIB:g})")
+    parser.add_argument("--merge", action="store_true",
+                        help="corpus runs only: keep the cases of the existing corpus report that this run does "
+                             "not measure (each case's ratios still come from one run; the report gives the date "
+                             "each case was measured)")
     parser.add_argument("--worker", metavar="SPEC", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     args.scenes_given = args.scenes is not None
@@ -1684,6 +1699,8 @@ def parse_args(argv=None) -> argparse.Namespace:
         parser.exit(2, f"compare_radiance: {exc}\n")
     if args.processes < 1:
         parser.exit(2, "compare_radiance: --processes must be >= 1\n")
+    if args.merge and not all(is_corpus(n) for n in args.scene_list):
+        parser.exit(2, "compare_radiance: --merge: only corpus cases can be merged (--scenes corpus:NAME-SKY,...)\n")
     if args.triangles < 1000:
         parser.exit(2, "compare_radiance: --triangles must be >= 1000\n")
     args.out_display = args.out
@@ -1832,10 +1849,16 @@ def compare(args) -> int:
             res["comparison"] = {"compute": [compare_at(ours, theirs, e) for e in ERROR_LEVELS],
                                  "process": [compare_at(ours_process, theirs, e) for e in ERROR_LEVELS]}
         res["fronts"] = {"lbl_illum": ours, "radiance": theirs}
+        res["measured"] = time.strftime("%Y-%m-%d")
         benches.append(bench)
         results[bench.name] = res
     bar.close()
     out = Path(args.out)
+    if args.merge:
+        kept = merge_corpus_cases(out / CORPUS_NAME / "results.json", args, results, skipped)
+        order = {case: k for k, case in enumerate(n[len(CORPUS_PREFIX):] for n in parse_scenes(CORPUS))}
+        benches = sorted(benches + [bench for bench, _ in kept], key=lambda b: order.get(b.name, len(order)))
+        results.update({bench.name: res for bench, res in kept})
     folder = write_report(out, benches, results, args, programs, time.perf_counter() - t_start, skipped)
     parts = []
     for b in benches:
@@ -1855,6 +1878,42 @@ def compare(args) -> int:
     print(f"radiance-comparison: {len(benches)} scene(s), {runs} runs ({failures} failed or stopped); ratio "
           f"ours/Radiance at {levels}: {'; '.join(parts)}; {time.perf_counter() - t_start:.0f} s -> {folder}")
     return 0
+
+
+#: Keys of a corpus case in results.json that the report adds to the run's own results.
+CASE_DESCRIPTION_KEYS = ("title", "reference", "zone", "scene_file", "points_file", "reference_illuminance")
+
+
+def merge_corpus_cases(path: Path, args, results: dict, skipped: dict) -> list:
+    """(bench, results) of the corpus cases of the report ``path`` that this run did not
+    measure, to be written again beside the new ones (``--merge``).  Refused when the
+    earlier report ran on other processes or another run timeout; a case whose reference
+    has changed since it was measured, or which cannot be prepared now, is dropped with a
+    line saying so (it has to be measured again)."""
+    if not path.is_file():
+        return []
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    old = doc.get("results", {})
+    if old.get("processes") != args.processes or old.get("run_timeout") != args.run_timeout:
+        raise RuntimeError(f"--merge: {path} was measured with --processes {old.get('processes')} and "
+                           f"--run-timeout {old.get('run_timeout')}; this run uses {args.processes} and "
+                           f"{args.run_timeout:g}: measure all cases again without --merge")
+    kept = []
+    for case, stored in old.get("corpus", {}).items():
+        if case in results or case in skipped:
+            continue
+        bench = prepare_corpus(case)
+        if isinstance(bench, str):
+            print(f"compare_radiance: --merge: {case} dropped: {bench}", file=sys.stderr)
+            continue
+        if not np.array_equal(np.asarray(stored.get("reference_illuminance"), np.float64), bench.reference):
+            print(f"compare_radiance: --merge: {case} dropped: its reference changed since it was measured",
+                  file=sys.stderr)
+            continue
+        res = {k: v for k, v in stored.items() if k not in CASE_DESCRIPTION_KEYS}
+        res.setdefault("measured", doc.get("environment", {}).get("date", "before --merge")[:10])
+        kept.append((bench, res))
+    return kept
 
 
 def zone_mean_side(zone: Sequence[float]) -> float:
