@@ -545,6 +545,8 @@ def test_corpus_report_has_a_section_and_a_summary(tiny_case, tmp_path):
     assert doc["corpus_verdicts"] == {"tiny-overcast": "met"} and doc["corpus_skipped"] == {"cabin-sunny":
                                                                                               "no reference yet"}
     assert doc["corpus"]["tiny-overcast"]["runs"][0]["compute_seconds"] == 0.5
+    assert doc["corpus"]["tiny-overcast"]["scene_file"] == "scene.toml"      # no machine's folders
+    assert cr.shown_path(cr.ROOT / "validation" / "corpus") == "validation/corpus"
 
 
 def test_merge_keeps_the_cases_a_run_does_not_measure(tiny_case, tmp_path, monkeypatch):

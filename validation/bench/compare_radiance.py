@@ -1016,6 +1016,13 @@ def corpus_bench(name: str, title: str, scene_path: Path, points_path: Path, ref
                  zone=room_zone(scene.triangles, points))
 
 
+def shown_path(path: Path) -> str:
+    """``path`` as a report shows it: relative to the repository when inside it (a
+    report names no machine's folders)."""
+    path = Path(path).resolve()
+    return path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else path.name
+
+
 def prepare_corpus(case: str) -> Bench | str:
     """The corpus case ``NAME-SKY`` as a :class:`Bench`, or why it is skipped (no
     reference yet, or one that does not match the scene)."""
@@ -1027,8 +1034,7 @@ def prepare_corpus(case: str) -> Bench | str:
     try:
         files, points = corpus.prepare(scene)
         info = {"role": scene.role, "source": scene.source, "description": scene.description, "sky": sky,
-                "scene_file": str(files[sky].relative_to(ROOT)) if files[sky].is_relative_to(ROOT)
-                else str(files[sky])}
+                "scene_file": shown_path(files[sky])}
         return corpus_bench(case, f"{case}: {scene.description}, {sky} sky", files[sky], points, ref, info)
     except (ValueError, OSError, subprocess.CalledProcessError) as exc:
         return f"cannot be prepared: {exc}"
@@ -1606,7 +1612,7 @@ def write_report(out: Path, benches: list, results: dict, args, programs, second
     if corpus or skipped:
         report.results.update(
             corpus={b.name: {"title": b.title, "reference": b.reference_info, "zone": b.zone,
-                             "scene_file": str(b.scene_path), "points_file": str(b.points_path),
+                             "scene_file": shown_path(b.scene_path), "points_file": shown_path(b.points_path),
                              "reference_illuminance": b.reference.tolist(), **results[b.name]} for b in corpus},
             corpus_skipped=dict(skipped), corpus_error_levels=list(CORPUS_ERROR_LEVELS),
             corpus_verdicts={b.name: results[b.name].get("verdict") for b in corpus},
