@@ -134,3 +134,30 @@ def inside_polygon(p, poly):
 
 
 L_ROOM = [(0, 0), (6, 0), (6, 3), (3, 3), (3, 6), (0, 6)]
+
+
+#: Quality of the office cache files of the cache tests (tests/io/test_cachefile.py, tests/cli/test_cache.py).
+CACHE_OPTIONS = {"accuracy": 0.2, "bounces": 2, "samples": 128}
+
+
+@pytest.fixture(scope="session")
+def office_quarter():
+    """The bundled office and every fourth point of its grid: (scene, points, normals)."""
+    from lbl_illum import load_scene, read_points
+
+    scene = load_scene(EXAMPLES / "office" / "scene.toml")
+    points, normals = read_points(EXAMPLES / "office" / "grid.pts", scene.unit_scale)
+    return scene, points[::4], normals[::4]
+
+
+@pytest.fixture(scope="session")
+def office_cache(office_quarter, tmp_path_factory):
+    """A cache file of the office at CACHE_OPTIONS, and the integrator that wrote it."""
+    from lbl_illum import Integrator, Options
+
+    scene, points, normals = office_quarter
+    integ = Integrator(scene, Options(**CACHE_OPTIONS))
+    integ.compute(points, normals)
+    path = tmp_path_factory.mktemp("saved") / "office.lblcache"
+    integ.cache.save(path)
+    return path, integ

@@ -1,4 +1,5 @@
-"""Luminance images: analytic pixel values, the cache shared with illuminance runs, the command.
+"""Luminance images: analytic pixel values, the cache shared with illuminance runs (the command:
+tests/cli/test_render_command.py).
 
 Reference values and tolerances.
 * A diffuse plane under a uniform sky and a sun, open to the whole upper hemisphere:
@@ -23,17 +24,14 @@ Reference values and tolerances.
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
 import pytest
 
 from lbl_illum import Options
-from lbl_illum.errors import InputError
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.scene.materials import plastic_fresnel, thin_pane_reflectance, ward_brdf
-from lbl_illum.cli.render import render_command, resolve_view
 from lbl_illum.engine.render import WEIGHT_LIMIT, image_options, render_image, trace_view_paths, view_spacing
 from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
 from lbl_illum.scene.views import View, view_from_string
@@ -409,111 +407,6 @@ def test_view_spacing_ignores_far_outliers():
     assert hi == pytest.approx(lo * 16)
     assert 2.5 < hi < 4.5                                        # D/2 of the room's 7.8 m diagonal, trimmed
     assert view_spacing(np.zeros((5, 3))) is None
-
-
-# -- views and the command -------------------------------------------------------------
-
-def test_named_views(tmp_path):
-    scene = two_rooms()
-    toml = tmp_path / "scene.toml"
-    toml.write_text('[views.corner]\nposition = [-1.2, -1.2, 1.6]\ntarget = [0, 0, 1]\nhorizontal = 70\n'
-                    '[views.desk]\nradiance = "-vta -vp 0 0 1.2 -vd 0 1 0"\n')
-    scene.path = toml
-    assert resolve_view(scene, "desk").type == "a"
-    assert resolve_view(scene, "corner").horizontal == 70.0
-    with pytest.raises(InputError, match="did you mean 'desk'"):
-        resolve_view(scene, "dsk")
-    scene.views = {"north": view_from_string("-vtv -vd 0 1 0")}      # a loader that keeps the views
-    assert resolve_view(scene, "north").direction == (0.0, 1.0, 0.0)
-    vf = tmp_path / "v.vf"
-    vf.write_text("rvu -vtv -vp 1 2 3 -vd 0 1 0 -vh 50 -vv 40\n")
-    assert resolve_view(scene, None, str(vf)).position == (1.0, 2.0, 3.0)
-    changed = resolve_view(scene, "-vh 30", str(vf))
-    assert changed.horizontal == 30.0 and changed.position == (1.0, 2.0, 3.0)
-    with pytest.raises(InputError, match="give a view"):
-        resolve_view(scene)
-
-
-ROOM_TOML = """units = "m"
-[[geometry]]
-shape = "box"
-center = [0, 0, 1.5]
-size = [3, 3, 3]
-material = "wall"
-[[geometry]]
-shape = "rectangle"
-origin = [-0.3, -0.3, 2.99]
-u = [0.6, 0, 0]
-v = [0, 0.6, 0]
-material = "lamp"
-[materials.wall]
-type = "diffuse"
-reflectance = 0.5
-[materials.lamp]
-type = "light"
-luminance = 2000
-[sky]
-type = "none"
-[settings]
-accuracy = 0.2
-samples = 64
-bounces = 2
-"""
-
-
-def command_args(tmp_path, **changes):
-    values = dict(scene=str(tmp_path / "room.toml"), view=ROOM_VIEW, view_file=None, x=32, y=32,
-                  output=str(tmp_path / "out.hdr"), pixel_samples=1, preview=None, falsecolor=None,
-                  falsecolor_max=None, falsecolor_scale="linear", cache=None, stats=None, quiet=True)
-    values.update(changes)
-    return argparse.Namespace(**values)
-
-
-def test_render_command_writes_the_image_with_its_view(tmp_path, capsys):
-    from lbl_illum.io.images import read_hdr_header, read_image
-
-    (tmp_path / "room.toml").write_text(ROOM_TOML)
-    args = command_args(tmp_path, preview=str(tmp_path / "p.png"), falsecolor=str(tmp_path / "f.png"),
-                        cache=str(tmp_path / "c.npz"), stats=str(tmp_path / "s.json"), quiet=False)
-    assert render_command(args) == 0
-    header = read_hdr_header(tmp_path / "out.hdr")
-    view = view_from_string(ROOM_VIEW)
-    assert header.view == view
-    assert (header.width, header.height) == view.resolution(32, 32)
-    image = read_image(tmp_path / "out.hdr")
-    assert image.rgb.shape == (header.height, header.width, 3)
-    assert image.luminance.max() == pytest.approx(2000.0, rel=1 / 256)
-    for name in ("p.png", "f.png", "c.npz", "s.json"):
-        assert (tmp_path / name).stat().st_size > 0
-    line = capsys.readouterr().err.strip().splitlines()[-1]
-    assert line.startswith("lbl-illum: render") and "records per level" in line and "rays" in line
-    # the second run reads the cache and adds nothing
-    import json
-
-    assert render_command(command_args(tmp_path, cache=str(tmp_path / "c.npz"), stats=str(tmp_path / "t.json"))) == 0
-    assert json.loads((tmp_path / "t.json").read_text())["records_made"] == 0
-
-
-def test_render_command_refuses_bad_input_before_writing(tmp_path):
-    (tmp_path / "room.toml").write_text(ROOM_TOML)
-    bad = [dict(output=str(tmp_path / "out.jpg")), dict(view="nowhere"), dict(view=None),
-           dict(view="-vtv -vh 200"), dict(preview=str(tmp_path / "p.jpg")), dict(x=0),
-           dict(point_samples=64), dict(cache=str(tmp_path / "no" / "c.npz"))]
-    for change in bad:
-        with pytest.raises(InputError) as info:
-            render_command(command_args(tmp_path, **change))
-        assert "\n" not in str(info.value)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["room.toml"]
-    # a cache made with point_samples is refused with the reason
-    scene_cache = tmp_path / "c.npz"
-    from lbl_illum.scene.scenefile import load_scene
-
-    scene = load_scene(tmp_path / "room.toml")
-    integ = Integrator(scene, scene.options.replace(point_samples=64))
-    integ.compute(FLOOR[:5], UP[:5])
-    integ.cache.save(scene_cache)
-    with pytest.raises(InputError, match="point_samples"):
-        render_command(command_args(tmp_path, cache=str(scene_cache)))
 
 
 # -- the paper's Figure 5 (validation/studies/figure5.py, quick version) ---------------

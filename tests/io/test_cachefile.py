@@ -1,6 +1,6 @@
 """Cache files: reuse gives identical results without new primary evaluations; wrong caches are
-refused; the format (docs/cache-files.md), merging, two processes sharing one file, and the
-``lbl-illum cache`` commands."""
+refused; the format (docs/cache-files.md), merging, two processes sharing one file.  The
+``lbl-illum cache`` commands: tests/cli/test_cache.py."""
 
 import json
 import os
@@ -11,27 +11,20 @@ import textwrap
 import numpy as np
 import pytest
 
-from lbl_illum import InputError, IrradianceCache, Options, load_scene, read_points
+from lbl_illum import InputError, IrradianceCache, Options
 from lbl_illum.io.cachefile import CACHE_FORMAT_VERSION, CacheData, merge_cache_data, read_cache_file, record_settings, write_cache_file
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.io.cachefile import attach_cache_file
 
-from conftest import EXAMPLES, ROOT
+from conftest import CACHE_OPTIONS, EXAMPLES, ROOT
 
 
-@pytest.fixture(scope="module")
-def office():
-    scene = load_scene(EXAMPLES / "office" / "scene.toml")
-    points, normals = read_points(EXAMPLES / "office" / "grid.pts", scene.unit_scale)
-    return scene, points[::4], normals[::4]
-
-
-OPTS = Options(accuracy=0.2, bounces=2, samples=128)
+OPTS = Options(**CACHE_OPTIONS)
 
 
 @pytest.mark.parametrize("opts", [OPTS, OPTS.replace(interpolation="hessian")], ids=["round", "elliptical"])
-def test_second_run_from_file_is_identical_and_computes_no_record(office, tmp_path, opts):
-    scene, points, normals = office
+def test_second_run_from_file_is_identical_and_computes_no_record(office_quarter, tmp_path, opts):
+    scene, points, normals = office_quarter
     first = Integrator(scene, opts)
     r1 = first.compute(points, normals)
     assert r1.stats.primary_evaluations > 0
@@ -51,8 +44,8 @@ def test_second_run_from_file_is_identical_and_computes_no_record(office, tmp_pa
         assert any(lv.leak[:lv.count].any() for lv in second.cache.levels)
 
 
-def test_cache_of_other_settings_or_scene_is_refused(office, tmp_path):
-    scene, points, normals = office
+def test_cache_of_other_settings_or_scene_is_refused(office_quarter, tmp_path):
+    scene, points, normals = office_quarter
     integ = Integrator(scene, OPTS)
     integ.compute(points[:2], normals[:2])
     path = tmp_path / "c.lblcache"
@@ -62,8 +55,8 @@ def test_cache_of_other_settings_or_scene_is_refused(office, tmp_path):
         IrradianceCache.load(path, other.fingerprint)
 
 
-def test_damaged_cache_is_refused(office, tmp_path):
-    scene, points, normals = office
+def test_damaged_cache_is_refused(office_quarter, tmp_path):
+    scene, points, normals = office_quarter
     integ = Integrator(scene, OPTS)
     integ.compute(points[:2], normals[:2])
     path = tmp_path / "c.lblcache"
@@ -76,17 +69,6 @@ def test_damaged_cache_is_refused(office, tmp_path):
 
 # -- the file format (docs/cache-files.md) ---------------------------------------------------
 
-@pytest.fixture(scope="module")
-def saved(office, tmp_path_factory):
-    """A cache file of the office at OPTS, and the integrator that wrote it."""
-    scene, points, normals = office
-    integ = Integrator(scene, OPTS)
-    integ.compute(points, normals)
-    path = tmp_path_factory.mktemp("saved") / "office.lblcache"
-    integ.cache.save(path)
-    return path, integ
-
-
 def _rezip(path, header=None, arrays=None):
     """Rewrite a cache file's members (a file a run did not write)."""
     with np.load(path) as npz:
@@ -98,8 +80,8 @@ def _rezip(path, header=None, arrays=None):
         np.savez(fh, **members)
 
 
-def test_header_holds_version_fingerprint_settings_counts_and_checksum(saved):
-    path, integ = saved
+def test_header_holds_version_fingerprint_settings_counts_and_checksum(office_cache):
+    path, integ = office_cache
     with np.load(path) as npz:
         header = json.loads(str(npz["header"]))
     assert header["version"] == CACHE_FORMAT_VERSION == 2
@@ -115,16 +97,16 @@ def test_header_holds_version_fingerprint_settings_counts_and_checksum(saved):
     assert s["geometry"]["triangles"] == len(integ.scene.triangles)
 
 
-def test_saving_twice_gives_the_same_bytes(saved, tmp_path):
-    path, integ = saved
+def test_saving_twice_gives_the_same_bytes(office_cache, tmp_path):
+    path, integ = office_cache
     again = tmp_path / "again.lblcache"
     IrradianceCache.load(path).save(again)
     assert again.read_bytes() == path.read_bytes()
 
 
 @pytest.mark.parametrize("damage", ["truncate", "flip", "header", "count", "array", "text", "empty"])
-def test_damaged_or_edited_file_is_refused_in_one_line(saved, tmp_path, damage):
-    path, integ = saved
+def test_damaged_or_edited_file_is_refused_in_one_line(office_cache, tmp_path, damage):
+    path, integ = office_cache
     bad = tmp_path / "bad.lblcache"
     bad.write_bytes(path.read_bytes())
     data = bytearray(path.read_bytes())
@@ -197,11 +179,11 @@ IMPOSSIBLE_RECORDS = [
 
 
 @pytest.mark.parametrize("case, name, change, message", IMPOSSIBLE_RECORDS, ids=[c[0] for c in IMPOSSIBLE_RECORDS])
-def test_records_no_evaluation_gives_are_refused_despite_a_correct_checksum(saved, tmp_path, case, name, change,
+def test_records_no_evaluation_gives_are_refused_despite_a_correct_checksum(office_cache, tmp_path, case, name, change,
                                                                             message):
     """One record of level 1 edited and the file re-written by the module's own writer (so
     the checksum is right): the loader refuses it, naming the file, the array and the record."""
-    path, integ = saved
+    path, integ = office_cache
     data = read_cache_file(path)
     assert data.header["levels"][1]["records"] > 3
     arrays = _edited(data.arrays, f"L1_{name}", 3, change)
@@ -215,9 +197,9 @@ def test_records_no_evaluation_gives_are_refused_despite_a_correct_checksum(save
     assert IrradianceCache.load(bad, integ.fingerprint).record_counts == integ.cache.record_counts
 
 
-def test_written_records_have_unit_normals_and_non_negative_irradiance(saved):
+def test_written_records_have_unit_normals_and_non_negative_irradiance(office_cache):
     """What the checks demand holds, with room to spare, for what a run writes."""
-    path, _ = saved
+    path, _ = office_cache
     data = read_cache_file(path)
     for k in range(len(data.header["levels"])):
         level = data.level(k)
@@ -226,8 +208,8 @@ def test_written_records_have_unit_normals_and_non_negative_irradiance(saved):
             assert np.all(np.abs(length - 1) < 1e-6) and np.all(level["E"] >= 0)
 
 
-def test_file_of_another_version_is_refused(saved, tmp_path):
-    path, integ = saved
+def test_file_of_another_version_is_refused(office_cache, tmp_path):
+    path, integ = office_cache
     bad = tmp_path / "future.lblcache"
     bad.write_bytes(path.read_bytes())
     header = read_cache_file(path).header
@@ -237,10 +219,10 @@ def test_file_of_another_version_is_refused(saved, tmp_path):
         IrradianceCache.load(bad, integ.fingerprint)
 
 
-def test_version_1_files_are_still_read(office, saved, tmp_path):
+def test_version_1_files_are_still_read(office_quarter, office_cache, tmp_path):
     """A version-1 file (one root cube, checksum of the arrays only) loads and answers as
     the version-2 file of the same records does."""
-    path, integ = saved
+    path, integ = office_cache
     data = read_cache_file(path)
     from lbl_illum.io.cachefile import _checksum_v1
     h = data.header
@@ -250,7 +232,7 @@ def test_version_1_files_are_still_read(office, saved, tmp_path):
     v1 = tmp_path / "v1.lblcache"
     with open(v1, "wb") as fh:
         np.savez(fh, header=np.array(json.dumps(old)), **data.arrays)
-    scene, points, normals = office
+    scene, points, normals = office_quarter
     results = []
     for p in (path, v1):
         again = Integrator(scene, OPTS)
@@ -260,9 +242,9 @@ def test_version_1_files_are_still_read(office, saved, tmp_path):
     assert np.array_equal(results[0].rgb, results[1].rgb)
 
 
-def test_other_settings_are_named_in_the_refusal_and_rebuild_replaces_the_file(office, saved, tmp_path):
-    path, integ = saved
-    scene, points, normals = office
+def test_other_settings_are_named_in_the_refusal_and_rebuild_replaces_the_file(office_quarter, office_cache, tmp_path):
+    path, integ = office_cache
+    scene, points, normals = office_quarter
     target = tmp_path / "c.lblcache"
     target.write_bytes(path.read_bytes())
     other = Integrator(scene, OPTS.replace(samples=64))
@@ -286,10 +268,10 @@ def test_missing_and_non_cache_files(tmp_path):
         IrradianceCache.load(tmp_path / "other.npz")
 
 
-def test_accuracy_zero_levels_are_not_written(office, tmp_path):
+def test_accuracy_zero_levels_are_not_written(office_quarter, tmp_path):
     """Records of a level with accuracy 0 (here: point samples) answer only their own query:
     the file leaves them out, and a rerun from it repeats the first run exactly."""
-    scene, points, normals = office
+    scene, points, normals = office_quarter
     opts = OPTS.replace(point_samples=256)
     path = tmp_path / "p.lblcache"
     first = Integrator(scene, opts)
@@ -311,8 +293,8 @@ def _record_set(data: CacheData, k: int) -> set:
     return {(p.tobytes(), n.tobytes()) for p, n in zip(a["P"], a["N"])}
 
 
-def test_save_merges_records_written_by_others(office, tmp_path):
-    scene, points, normals = office
+def test_save_merges_records_written_by_others(office_quarter, tmp_path):
+    scene, points, normals = office_quarter
     path = tmp_path / "shared.lblcache"
     a, b = Integrator(scene, OPTS), Integrator(scene, OPTS)
     a.compute(points[0::2], normals[0::2])
@@ -332,9 +314,9 @@ def test_save_merges_records_written_by_others(office, tmp_path):
     assert merged.record_counts == b.cache.record_counts
 
 
-def test_merge_refuses_incompatible_caches(office, saved):
-    path, integ = saved
-    scene, points, normals = office
+def test_merge_refuses_incompatible_caches(office_quarter, office_cache):
+    path, integ = office_cache
+    scene, points, normals = office_quarter
     other = Integrator(scene, OPTS.replace(bounces=3))
     other.compute(points[:2], normals[:2])
     with pytest.raises(InputError, match=r"bounces, level_accuracy|bounces differ"):
@@ -411,76 +393,3 @@ def test_lock_excludes_a_second_process(tmp_path):
         busy = subprocess.run([sys.executable, "-c", probe, str(path)], capture_output=True, text=True, env=env)
     free = subprocess.run([sys.executable, "-c", probe, str(path)], capture_output=True, text=True, env=env)
     assert busy.stdout.strip() == "BUSY" and free.stdout.strip() == "GOT"
-
-
-# -- lbl-illum cache info / merge ----------------------------------------------------------------
-
-def cache_cli(argv, capsys):
-    """Run ``lbl-illum cache ...``: through lbl_illum.cli.main.main once it knows the command,
-    else through a parser built the same way (errors: one line, exit status 2)."""
-    from lbl_illum.cli import main as cli
-    from lbl_illum.cli.cache import add_cache_commands, run_cache_command
-
-    commands = cli._build_parser()._subparsers._group_actions[0].choices
-    if "cache" in commands:
-        code = cli.main(argv)
-    else:
-        parser = cli._Parser(prog="lbl-illum")
-        add_cache_commands(parser.add_subparsers(dest="command", parser_class=cli._Parser))
-        try:
-            code = run_cache_command(parser.parse_args(argv))
-        except InputError as exc:
-            print(f"lbl-illum: error: {exc}", file=sys.stderr)
-            code = 2
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def test_cache_info_prints_header_and_level_statistics(saved, capsys):
-    path, integ = saved
-    code, out, err = cache_cli(["cache", "info", str(path)], capsys)
-    assert code == 0, err
-    assert "format version 2" in out and integ.fingerprint in out
-    assert "accuracy 0.2, bounces 2, samples 128" in out and "cie-overcast" in out
-    counts = integ.cache.record_counts
-    assert f"records: {sum(counts):,} in 3 levels" in out
-    code, out, err = cache_cli(["cache", "info", "--json", str(path)], capsys)
-    doc = json.loads(out)
-    assert [lv["records"] for lv in doc["levels"]] == counts
-    lv = integ.cache.levels[1]
-    R = lv.R[:lv.count].astype(np.float64)
-    assert doc["levels"][1]["radius"]["q50"] == pytest.approx(np.median(R))
-    assert doc["levels"][1]["radius"]["q0"] == pytest.approx(R.min())
-    from lbl_illum.photometry import luminance
-    E = luminance(lv.E[:lv.count].astype(np.float64))
-    assert doc["levels"][1]["illuminance"]["max"] == pytest.approx(E.max())
-    assert doc["memory_bytes"] > 100 * sum(counts)
-
-
-def test_cache_merge_command(office, saved, tmp_path, capsys):
-    path, integ = saved
-    scene, points, normals = office
-    extra = Integrator(scene, OPTS)
-    extra.compute(points[:5] + [0.31, 0.17, 0.0], normals[:5])
-    other_path = tmp_path / "other.lblcache"
-    extra.cache.save(other_path)
-    out_path = tmp_path / "merged.lblcache"
-    code, out, err = cache_cli(["cache", "merge", str(path), str(other_path), "-o", str(out_path)], capsys)
-    assert code == 0, err
-    merged = read_cache_file(out_path)
-    for k in range(3):
-        assert _record_set(merged, k) == _record_set(read_cache_file(path), k) | _record_set(extra.cache.to_data(), k)
-    assert err.startswith("lbl-illum: cache merge: 2 files") and err.count("\n") == 1
-    # incompatible caches: one line, exit status 2, no output
-    wrong = Integrator(scene, OPTS.replace(samples=64))
-    wrong.compute(points[:2], normals[:2])
-    wrong_path = tmp_path / "wrong.lblcache"
-    wrong.cache.save(wrong_path)
-    code, out, err = cache_cli(["cache", "merge", str(path), str(wrong_path), "-o", str(tmp_path / "no.lblcache")],
-                               capsys)
-    assert code == 2 and err.count("\n") == 1 and "samples differ" in err
-    assert not (tmp_path / "no.lblcache").exists()
-    code, out, err = cache_cli(["cache", "info", str(tmp_path / "missing.lblcache")], capsys)
-    assert code == 2 and "no such cache file" in err and err.count("\n") == 1
-    code, out, err = cache_cli(["cache", "merge", str(path)], capsys)      # -o is required
-    assert code == 2 and err.count("\n") == 1
