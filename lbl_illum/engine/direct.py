@@ -31,8 +31,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene.geometry import TriangleSampler
-from ..scene.materials import GLASS, LIGHT, MaterialTable, ward_brdf
-from .raycast import MAX_GLASS_LAYERS, Tracer, step_past
+from ..scene.materials import LIGHT, MaterialTable, ward_brdf
+from .raycast import Tracer, through_panes
 from ..daylight.sun import SUN_COS_HALF_ANGLE, Sun
 from .sunmirrors import NOTE_SHARE, SunMirrors
 
@@ -228,8 +228,9 @@ class DirectLight:
 
         Without angle-dependent glass this is :meth:`Tracer.transmittance`.  With it, the
         segments that the tracer finds unblocked and through glass (0 < T < 1) are followed
-        again, pane by pane, with closest-hit queries, and each pane's normal-incidence
-        τ_n is replaced by τ(θ) (:meth:`~lbl_illum.scene.materials.MaterialTable.specular`).
+        again, pane by pane, with closest-hit queries (:func:`~lbl_illum.engine.raycast.through_panes`),
+        and each pane's normal-incidence τ_n is replaced by τ(θ)
+        (:meth:`~lbl_illum.scene.materials.MaterialTable.specular`).
         """
         T = self.tracer.transmittance(origins, directions, tmax)
         if not self._angular or len(T) == 0:
@@ -237,26 +238,10 @@ class DirectLight:
         todo = np.flatnonzero((T.max(axis=1) > 0.0) & (T.min(axis=1) < 1.0))
         if len(todo) == 0:
             return T
-        o = np.asarray(origins, np.float64)[todo]
-        d = np.asarray(directions, np.float64)[todo]
-        tm = np.full(len(todo), np.inf) if tmax is None else np.asarray(tmax, np.float64)[todo]
-        product = np.ones((len(todo), 3))
-        live = np.arange(len(todo))
-        kind = self.materials.kind[self.tracer.triangles.material]
-        for _ in range(MAX_GLASS_LAYERS):
-            if len(live) == 0:
-                break
-            hits = self.tracer.intersect(o, d)
-            glass = hits.hit & (hits.t < tm)
-            glass[glass] = kind[hits.prim[glass]] == GLASS      # an opaque hit here is round-off
-            live, o, d, tm, t, prim = (live[glass], o[glass], d[glass], tm[glass], hits.t[glass],
-                                       hits.prim[glass])
-            if len(live) == 0:
-                break
-            cos_i = np.abs(np.einsum("ij,ij->i", self.tracer.normals[prim], d))
-            product[live] *= self.materials.glass_transmittance(self.tracer.triangles.material[prim], cos_i)
-            o, step = step_past(o, d, t, self.tracer.length_scale)
-            tm = tm - step
+        # an opaque hit on the way is round-off here: the tracer found the segment unblocked
+        product = through_panes(self.tracer, self.materials, np.asarray(origins, np.float64)[todo],
+                                np.asarray(directions, np.float64)[todo],
+                                tmax=None if tmax is None else np.asarray(tmax, np.float64)[todo]).product
         T[todo] = np.where(T[todo] > 0.0, product, 0.0)
         return T
 

@@ -13,7 +13,8 @@ leaving a surface must start a little off it.  This module owns that problem:
   behaves the same.
 
 Shadow rays use Embree's ``OCCLUDED`` query against the opaque surfaces only, and
-glass along a shadow ray multiplies it by the glass's transmittance.
+glass along a shadow ray multiplies it by the glass's transmittance at normal incidence;
+:func:`through_panes` follows rays pane by pane for τ at each pane's angle of incidence.
 
 embreex releases the GIL inside ``run``, so large batches are split into chunks
 traced by a thread pool and every core is used.
@@ -36,7 +37,8 @@ from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
 from ..scene.geometry import orthonormal_basis
 from ..scene.materials import GLASS
 
-__all__ = ["Tracer", "RayCaster", "Hits", "SELF_HIT_EPSILON", "thread_count", "step_past"]
+__all__ = ["Tracer", "RayCaster", "Hits", "SELF_HIT_EPSILON", "thread_count", "step_past", "through_panes",
+           "PanePath"]
 
 #: Relative offset of ray origins off the surface they leave (see module docstring).
 SELF_HIT_EPSILON = 1e-5
@@ -98,6 +100,96 @@ def step_past(origins: np.ndarray, directions: np.ndarray, t: np.ndarray, length
     openings)."""
     step = t + SELF_HIT_EPSILON * (np.abs(origins).max(axis=1) + t + length_scale)
     return origins + step[:, None] * directions, step
+
+
+@dataclass
+class PanePath:
+    """What :func:`through_panes` found along k rays.
+
+    reached : (k,) bool — the ray ended where its caller wanted: on a ``stop`` triangle, or
+        (without ``stop``) past its last pane with nothing more before ``tmax``
+    blocked : (k,) bool — the ray ended on an opaque surface (no ``stop`` triangle) before ``tmax``
+    prim : (k,) int64 — the triangle that ended the ray (a ``stop`` or opaque one), −1 for none
+    distance : (k,) float64 — distance [m] from the origin to ``prim`` along the ray, ``inf`` where ``prim`` is −1
+    product : (k, 3) float64 — the product of τ(θ) over the panes crossed, 1 for none
+    """
+
+    reached: np.ndarray
+    blocked: np.ndarray
+    prim: np.ndarray
+    distance: np.ndarray
+    product: np.ndarray
+
+
+def through_panes(tracer: "Tracer", materials, origins: np.ndarray, directions: np.ndarray, *,
+                  tmax: np.ndarray | None = None, stop=None, layers: int = MAX_GLASS_LAYERS) -> PanePath:
+    """Follow k rays through the panes of glass on their way, multiplying each pane's
+    transmittance at its own angle of incidence: the one glass step of the shadow rays
+    (:meth:`lbl_illum.engine.direct.DirectLight.transmittance`) and of the rays to the sun's
+    images (:mod:`lbl_illum.engine.sunmirrors`).
+
+    Light along a ray through panes 1 … m keeps T = Π_j τ_j(θ_j), τ_j the (3,) transmittance
+    of pane j at the incidence angle θ_j between the ray and the pane's normal
+    (cos θ_j = |n_j · d|; Fresnel glazing depends on it, constant glass does not:
+    ``materials.glass_transmittance``, :meth:`~lbl_illum.scene.materials.MaterialTable.specular`).
+    Each step is a closest-hit query against every surface (``tracer.intersect``); the ray
+    then continues just beyond the pane (:func:`step_past`).  A hit before ``tmax`` is, in this order:
+
+    * on a triangle that ``stop(prim, ray)`` accepts ((m,) bool for the hit triangles
+      ``prim`` of the rays ``ray``, indices into ``origins``): the end, reached;
+    * on glass: crossed, τ(θ) multiplied in, the ray goes on;
+    * on anything else (opaque): the end, blocked.
+
+    A ray that meets nothing before ``tmax`` ends there, reached if there is no ``stop``
+    (the segment is clear), not reached otherwise.  After ``layers`` queries a ray still in
+    glass is neither reached nor blocked; its product holds the panes crossed.
+
+    origins, directions : (k, 3) [m] and unit;  tmax : (k,) [m] segment lengths, None for
+    none;  the distances along a ray add each query's hit distance and step, in metres.
+    """
+    origins = np.asarray(origins, np.float64)
+    directions = np.asarray(directions, np.float64)
+    k = len(origins)
+    reached = np.zeros(k, bool)
+    blocked = np.zeros(k, bool)
+    prim = np.full(k, -1, np.int64)
+    distance = np.zeros(k)
+    product = np.ones((k, 3))
+    material = tracer.triangles.material
+    is_glass = materials.kind[material] == GLASS
+    live = np.arange(k)
+    o, d = origins, directions
+    tm = None if tmax is None else np.asarray(tmax, np.float64)
+    for _ in range(layers):
+        if len(live) == 0:
+            break
+        hits = tracer.intersect(o, d)
+        near = hits.hit if tm is None else hits.hit & (hits.t < tm)
+        goal = np.zeros(len(live), bool)
+        if stop is not None:
+            goal[near] = stop(hits.prim[near], live[near])
+        glass = near & ~goal
+        glass[glass] = is_glass[hits.prim[glass]]
+        opaque = near & ~goal & ~glass
+        end = goal | opaque
+        prim[live[end]] = hits.prim[end]
+        distance[live[end]] += hits.t[end]
+        reached[live[goal]] = True
+        blocked[live[opaque]] = True
+        if stop is None:
+            reached[live[~near]] = True
+        live, o, d, t, pr = live[glass], o[glass], d[glass], hits.t[glass], hits.prim[glass]
+        if tm is not None:
+            tm = tm[glass]
+        if len(live) == 0:
+            break
+        cos_i = np.abs(np.einsum("ij,ij->i", tracer.normals[pr], d))
+        product[live] *= materials.glass_transmittance(material[pr], cos_i)
+        o, step = step_past(o, d, t, tracer.length_scale)
+        distance[live] += step
+        if tm is not None:
+            tm = tm - step
+    return PanePath(reached, blocked, prim, np.where(prim >= 0, distance, np.inf), product)
 
 
 @dataclass

@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..scene.materials import GLASS, MIRROR, PLASTIC, MaterialTable
-from .raycast import MAX_GLASS_LAYERS, SELF_HIT_EPSILON, Tracer, step_past
+from .raycast import MAX_GLASS_LAYERS, SELF_HIT_EPSILON, Tracer, through_panes
 
 __all__ = ["SunMirrors", "MAX_PLANES"]
 
@@ -148,40 +148,17 @@ class SunMirrors:
 
     def _reach_reflector(self, origins, u, plane):
         """Follow the rays from the points along u to their reflector planes ``plane``,
-        through any panes on the way.  Returns ``(ok, prim, t, T_near)``: (k,) whether the
-        ray reaches a triangle of its plane, that triangle, the distance [m] to it, and
+        through any panes on the way (:func:`~lbl_illum.engine.raycast.through_panes`:
+        MAX_GLASS_LAYERS + 1 closest-hit queries, room for that many panes and the reflector).  Returns ``(ok, prim, t, T_near)``: (k,) whether the
+        ray reaches a triangle of its plane, that triangle (−1 if not), the distance [m] to it (inf), and
         (k, 3) the product of τ(θ) of the panes crossed before it (glass of other planes,
         :meth:`MaterialTable.glass_transmittance`; Radiance's shadow rays to a virtual
         source pass through glass likewise).  An opaque surface on the way ends the ray."""
-        k = len(origins)
-        ok = np.zeros(k, bool)
-        prim = np.full(k, -1, np.int64)
-        t_total = np.zeros(k)
-        T_near = np.ones((k, 3))
-        material = self.tracer.triangles.material
-        is_glass = self.materials.kind[material] == GLASS if len(material) else np.zeros(0, bool)
-        live = np.arange(k)
-        o = origins
-        d = u
-        for _ in range(MAX_GLASS_LAYERS + 1):
-            hits = self.tracer.intersect(o, d)
-            hit = hits.hit
-            on_plane = hit.copy()
-            on_plane[hit] = self.plane_of[hits.prim[hit]] == plane[live[hit]]
-            found = live[on_plane]
-            ok[found] = True
-            prim[found] = hits.prim[on_plane]
-            t_total[found] += hits.t[on_plane]
-            past = hit & ~on_plane
-            past[past] = is_glass[hits.prim[past]]                    # a pane of another plane
-            if not past.any():
-                break
-            live, o, d, t, pr = live[past], o[past], d[past], hits.t[past], hits.prim[past]
-            cos_i = np.abs(np.einsum("ij,ij->i", self.tracer.normals[pr], d))
-            T_near[live] *= self.materials.glass_transmittance(material[pr], cos_i)
-            o, step = step_past(o, d, t, self.tracer.length_scale)
-            t_total[live] += step
-        return ok, prim, t_total, T_near
+        plane_of = self.plane_of
+        path = through_panes(self.tracer, self.materials, origins, u,
+                             stop=lambda prim, ray: plane_of[prim] == plane[ray], layers=MAX_GLASS_LAYERS + 1)
+        ok = path.reached
+        return ok, np.where(ok, path.prim, -1), np.where(ok, path.distance, np.inf), path.product
 
 
 @njit(cache=True)
