@@ -153,3 +153,72 @@ def test_ray_caster_first_hit_occlusion_and_counts_against_closed_form_distances
     empty = RayCaster(np.zeros((0, 3, 3)))
     t, prim = empty.first_hit(o, d)
     assert empty.empty and np.all(np.isinf(t)) and np.all(prim == -1) and not empty.occluded(o, d).any()
+
+
+def _pane_scene():
+    """A horizontal Fresnel pane (τ_n = 0.6) at z = 1, a vertical Fresnel pane (τ_n = 0.8) at
+    x = 2.5, a target at x = 5 and, for rays at y ≈ 3 only, an opaque wall at x = 2."""
+    from lbl_illum import Options
+    from lbl_illum.engine.integrator import Integrator
+    from conftest import make_scene
+
+    geo = [{"shape": "rectangle", "origin": [-5, -4, 1], "u": [10, 0, 0], "v": [0, 8, 0], "material": "fresnel"},
+           {"shape": "rectangle", "origin": [2.5, -4, -1], "u": [0, 8, 0], "v": [0, 0, 6], "material": "upright"},
+           {"shape": "rectangle", "origin": [5, -4, -1], "u": [0, 8, 0], "v": [0, 0, 8], "material": "target"},
+           {"shape": "rectangle", "origin": [2, 2, -1], "u": [0, 2, 0], "v": [0, 0, 6], "material": "wall"}]
+    mats = {"fresnel": {"type": "glass", "transmittance": 0.6},
+            "upright": {"type": "glass", "transmittance": 0.8},
+            "target": {"type": "diffuse", "reflectance": 0.5},
+            "wall": {"type": "diffuse", "reflectance": 0.5}}
+    scene = make_scene(geo, mats)
+    integ = Integrator(scene, Options(bounces=0))
+    names = [m.name for m in scene.materials]
+    return integ.tracer, integ.materials, names
+
+
+def test_through_panes_multiplies_each_panes_own_angle_and_stops_where_told():
+    """Rays at 55° from the vertical in the xz-plane meet the horizontal pane at 55° and the
+    vertical one at 35°: T = τ_A(55°) · τ_B(35°), each pane's own τ(θ)
+    (MaterialTable.glass_transmittance; τ_A(55°) = 0.524 for τ_n = 0.6, test_direct's closed form).  Distances are the planes' along the ray
+    (x / sin 55°), to Embree's float32 round-off (rel 1e-6); products to 1e-12."""
+    from lbl_illum.engine.raycast import through_panes
+
+    tracer, materials, names = _pane_scene()
+    fresnel, upright, target = names.index("fresnel"), names.index("upright"), names.index("target")
+    mat = tracer.triangles.material
+    s, c = np.sin(np.radians(55.0)), np.cos(np.radians(55.0))
+    tau55 = materials.glass_transmittance(np.array([fresnel]), np.array([c]))[0]
+    tau35 = materials.glass_transmittance(np.array([upright]), np.array([s]))[0]
+    assert tau55 == pytest.approx(np.full(3, 0.524), abs=1e-3)
+    # (each pane's own angle matters: pane B at 55° passes 0.739, 6 % less than at 35°)
+    assert materials.glass_transmittance(np.array([upright]), np.array([c]))[0, 0] < tau35[0] - 0.01
+    # 0: through both panes to the target; 1: the wall at x = 2 after the first pane;
+    # 2: towards −x, through the first pane into nothing
+    o = np.array([[0.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, 0.0]])
+    d = np.array([[s, 0.0, c], [s, 0.0, c], [-s, 0.0, c]])
+    both, first = tau55 * tau35, tau55
+
+    path = through_panes(tracer, materials, o, d, stop=lambda prim, ray: mat[prim] == target)
+    np.testing.assert_array_equal(path.reached, [True, False, False])
+    np.testing.assert_array_equal(path.blocked, [False, True, False])
+    assert mat[path.prim[0]] == target and names[mat[path.prim[1]]] == "wall" and path.prim[2] == -1
+    np.testing.assert_allclose(path.distance[:2], [5.0 / s, 2.0 / s], rtol=1e-6)
+    assert path.distance[2] == np.inf
+    np.testing.assert_allclose(path.product, [both, first, first], rtol=1e-12)
+
+    # without a stop rule a segment is reached when nothing opaque lies before its end:
+    # ray 0 ends between the panes (tmax 2 / sin 55°), ray 2 at infinity, ray 1 at the wall
+    path = through_panes(tracer, materials, o, d, tmax=np.array([2.0 / s, np.inf, np.inf]))
+    np.testing.assert_array_equal(path.reached, [True, False, True])
+    np.testing.assert_array_equal(path.blocked, [False, True, False])
+    np.testing.assert_array_equal(path.prim[[0, 2]], [-1, -1])
+    np.testing.assert_allclose(path.product, [first, first, first], rtol=1e-12)
+
+    # the stop rule sees the rays' own indices; one query crosses one pane and ends nowhere
+    path = through_panes(tracer, materials, o[:1].repeat(2, 0), d[:1].repeat(2, 0),
+                         stop=lambda prim, ray: (mat[prim] == target) & (ray == 1))
+    np.testing.assert_array_equal(path.reached, [False, True])
+    np.testing.assert_array_equal(path.blocked, [True, False])
+    path = through_panes(tracer, materials, o[:1], d[:1], stop=lambda prim, ray: mat[prim] == target, layers=1)
+    assert not path.reached[0] and not path.blocked[0] and path.prim[0] == -1
+    np.testing.assert_allclose(path.product[0], first, rtol=1e-12)
