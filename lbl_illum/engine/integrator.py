@@ -41,6 +41,10 @@ the distance from P_i to the box around the query points: far from every query, 
 record is seen under a small solid angle and may grow in proportion (a level-of-detail
 rule of this project; it keeps a kilometre-wide ground from costing records, where a
 limit tied to the scene's bounding box makes records as large as rooms).
+
+**Portal samples** (:mod:`lbl_illum.engine.portal_sampling`).  Records behind the
+windows also sample the portals' area, combined with their hemisphere rays by multiple
+importance sampling (the paper's §5).
 """
 
 from __future__ import annotations
@@ -63,8 +67,8 @@ from ..scene.materials import russian_roulette
 from ..options import Options
 from .placement import distance_bands, pick_per_cell
 from ..photometry import luminance
-from .paths import HEMISPHERE, MAX_SPECULAR_DEPTH, follow_paths
-from .raycast import Hits, Tracer, step_past
+from .portal_sampling import portal_sample_plan, portal_samples, trace_hemisphere_rays
+from .raycast import Tracer
 from ..scene.scenefile import Scene
 
 __all__ = ["IlluminanceResult", "RunPlan", "RunStats", "Integrator", "scene_fingerprint",
@@ -82,8 +86,6 @@ QUERY_LIGHT_SAMPLES = 16
 #: error against a converged reference: 12,043 against 5,026 level-2 records.)
 MAX_SPACING_FRACTION = 0.5
 SPACING_RATIO = 16.0
-#: Portal samples per primary evaluation, as a fraction of its hemisphere samples.
-PORTAL_SAMPLE_FRACTION = 0.5
 #: Rays that reach the sky count as hits this many times the largest record spacing away
 #: in the Hessian of a record's hemisphere (:func:`~lbl_illum.engine.hessian.irradiance_hessian`).
 HESSIAN_FAR = 1e4
@@ -306,38 +308,6 @@ def default_spacing(tracer: Tracer, points, normals, rng: np.random.Generator) -
     return max_spacing / SPACING_RATIO, max_spacing
 
 
-class _PortalWeights:
-    """The balance-heuristic weights of hemisphere rays drawn beside portal samples
-    (:meth:`Integrator.trace_paths`, the hook of :func:`lbl_illum.engine.paths.follow_paths`):
-    the openings a ray crosses before its first hit, plus the portal glass it goes
-    through if its first hit is one and it is transmitted there."""
-
-    def __init__(self, integ: "Integrator", n: int, normals, S, n_p, reach=None):
-        self.integ, self.normals, self.S = integ, normals, S
-        self.n_p = np.broadcast_to(np.asarray(n_p, np.float64), (n,))     # per ray (0: draws none)
-        self.weight = np.ones(n)
-        self.reach = reach              # samples on openings: unobstructed up to them
-        self.p_open = None
-
-    def first_hit(self, ray, origins, directions, hits):
-        keep = None
-        if self.reach is not None:
-            keep = hits.t > self.reach
-            self.weight[~keep] = 0.0
-            ray, origins, directions = ray[keep], origins[keep], directions[keep]
-            hits = Hits(hits.t[keep], hits.prim[keep])
-        self.p_open = self.integ._portal_density(directions, hits.t, origins=origins)
-        self.weight[ray] = self.integ._hemisphere_weight(self.normals[ray], directions, self.p_open, self.S,
-                                                         self.n_p[ray])
-        return keep
-
-    def through_portal(self, ray, directions, hits, rows):
-        d = directions[rows]
-        density = self.p_open[rows] + self.integ._portal_density(d, hits.t[rows], prim=hits.prim[rows])
-        r = ray[rows]
-        self.weight[r] = self.integ._hemisphere_weight(self.normals[r], d, density, self.S, self.n_p[r])
-
-
 class Integrator:
     """Computes illuminance for one scene and one set of options, with a cache.
 
@@ -412,33 +382,13 @@ class Integrator:
 
     # -- hemisphere rays ----------------------------------------------------------------
     def trace_paths(self, origins, directions, rng, through=None, portal_mis=None):
-        """Follow rays through specular surfaces to the sky, a light or a diffuse surface.
-
-        ``through`` (n, 3) is each ray's starting throughput (default 1).
-        ``portal_mis = (normals, S, n_p)`` marks rays from points that draw S cosine-
-        distributed hemisphere rays about ``normals`` (n, 3) and ``n_p`` (a number, or one
-        per ray) portal samples:
-        every ray gets the weight S p_h / (S p_h + n_p p_p) (see :meth:`_portal_samples`),
-        p_p the portal density of its direction (:meth:`_portal_density`) — the openings
-        it crosses before its first hit, plus the portal glass it goes through if its first
-        hit is one and it is transmitted there.  ``portal_mis = (normals, S, n_p, reach)``
-        marks portal samples on openings instead, ``reach`` (n,) the distance to the point
-        drawn: a ray that meets a surface before it is dropped (weight 0).
-        Glass transmits and reflects by its angle of incidence
-        (:meth:`~lbl_illum.scene.materials.MaterialTable.specular`).
-
-        Returns ``(first_t, radiance, hits, mis)``: (n,) first-hit distance (inf to the
-        sky), (n, 3) radiance already known (sky, lights seen by reflection), the diffuse
-        hits as a dict of arrays ``ray, P, Ns, Ng, weight`` (weight = throughput ρ/π),
-        and (n,) the MIS weight of each ray (1 unless it went through a portal), which
-        the radiance and hit weights do not include.
-        """
-        weights = None if portal_mis is None else _PortalWeights(self, len(origins), *portal_mis)
-        paths = follow_paths(self.context, origins, directions, rng, HEMISPHERE, through=through,
-                             portal_weights=weights)
-        hits = {"ray": paths.ray, "P": paths.P, "Ns": paths.Ns, "Ng": paths.Ng, "weight": paths.weight}
-        mis_weight = weights.weight if weights is not None else np.ones(len(origins))
-        return paths.first_t, paths.radiance, hits, mis_weight
+        """Follow rays through specular surfaces to the sky, a light or a diffuse surface,
+        with the portal weights of ``portal_mis`` if given:
+        :func:`lbl_illum.engine.portal_sampling.trace_hemisphere_rays` on this integrator's
+        lighting context, which says what the arguments and the returned
+        ``(first_t, radiance, hits, mis)`` are."""
+        return trace_hemisphere_rays(self.context, origins, directions, rng, through=through,
+                                     portal_mis=portal_mis)
 
     # -- placement (top-down) ---------------------------------------------------------
     def _evaluate_hemispheres(self, k, q: _Queries, pending: _Pending, rng, run: RunPlan):
@@ -457,18 +407,12 @@ class Integrator:
         else:
             base = self.tracer.sensor_origins(P, Ng) if k == 0 else self.tracer.offset(P, Ng)
         origins = np.repeat(base, S, axis=0)
-        n_p = 0
         # portal samples add rays per record; on the one-ray paths of accuracy 0 below
         # the first level they would make every path branch, so those go without (with
-        # point samples, accuracy 0 gives the first reflection its full samples: portals)
+        # point samples, accuracy 0 gives the first reflection its full samples: portals);
+        # only points behind the portals sample them (lbl_illum.engine.portal_sampling)
         path_level = k > 0 and samples == 1
-        inside = None
-        if self.portals is not None and not path_level:
-            # only points behind the portals sample them (lbl_illum.engine.portals)
-            inside = np.flatnonzero(self.portal_set.inside(P))
-            if len(inside):
-                gx, gy = self.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
-                n_p = gx * gy
+        inside, n_p = (None, 0) if path_level else portal_sample_plan(self.context, P, S)
         per_ray = np.repeat(np.where(np.isin(np.arange(r), inside), n_p, 0), S) if n_p else None
         mis = (np.repeat(Ns, S, axis=0), S, per_ray) if n_p else None
         first_t, radiance, hits, ray_mis = self.trace_paths(origins, dirs, rng, portal_mis=mis)
@@ -485,8 +429,8 @@ class Integrator:
             pending.ray_dir.append(dirs.astype(np.float32))
             pending.cells = (m, n)
         if n_p:
-            p_known, p_hits, p_owner = self._portal_samples(P[inside], Ns[inside], Ng[inside], S, n_p, rng,
-                                                            base[inside])
+            p_known, p_hits, p_owner = portal_samples(self.context, P[inside], Ns[inside], Ng[inside], S, n_p,
+                                                      rng, base[inside])
             known[inside] += p_known
             p_owner = inside[p_owner]
             hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng")}
@@ -647,127 +591,6 @@ class Integrator:
         with np.errstate(divide="ignore", invalid="ignore"):
             limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
         return limit
-
-    def _portal_density(self, directions, t, prim=None, origins=None):
-        """Solid-angle density [1/sr] of drawing ``directions`` by one portal sample.
-
-        A point drawn on portal triangle k (area density p_A) at distance t seen under
-        cosine cos_p is the direction's density p_A t² / cos_p.  The sum covers, for rays
-        with first hits at distance ``t``:
-
-        * ``prim`` given: the portal glass triangle each ray's first hit is (entries that
-          are no portal add nothing);
-        * ``origins`` given: every opening of ``[[portals]]`` the ray crosses before t
-          (found with the openings' own tracer, nearest first; an opening counts only
-          when nothing lies between it and the point, as for its samples).
-        """
-        directions = np.asarray(directions, np.float64)
-        density = np.zeros(len(directions))
-        if prim is not None and len(directions):
-            k = self.context.portal_index[np.asarray(prim, np.int64)]
-            glass = np.flatnonzero(k >= 0)
-            if len(glass):
-                kk = k[glass]
-                cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], directions[glass]))
-                density[glass] = self.portals.pdf_area(kk) * t[glass] ** 2 / np.maximum(cos_p, 1e-300)
-        if origins is None or self.context.openings is None or len(directions) == 0:
-            return density
-        live = np.arange(len(directions))
-        o = np.asarray(origins, np.float64)
-        d, tmax, start = directions, np.asarray(t, np.float64), np.zeros(len(directions))
-        for _ in range(MAX_SPECULAR_DEPTH):
-            hits = self.context.openings.intersect(o, d)
-            crossed = hits.t < tmax
-            live, o, d, tmax, start, tt, prim_o = (live[crossed], o[crossed], d[crossed], tmax[crossed],
-                                                   start[crossed], hits.t[crossed], hits.prim[crossed])
-            if len(live) == 0:
-                break
-            kk = self.context.opening_first + prim_o
-            dist = start + tt                                 # from the ray's origin
-            cos_p = np.abs(np.einsum("ij,ij->i", self.portals.normals[kk], d))
-            density[live] += self.portals.pdf_area(kk) * dist ** 2 / np.maximum(cos_p, 1e-300)
-            o, step = step_past(o, d, tt, self.context.openings.length_scale)
-            start, tmax = start + step, tmax - step
-        return density
-
-    def _hemisphere_weight(self, normals, directions, density, S, n_p):
-        """Balance-heuristic weight S p_h / (S p_h + n_p p_p) of a ray in direction ω from
-        a point drawing S hemisphere rays (p_h = max(0, N·ω)/π) and n_p portal samples of
-        portal density p_p = ``density`` (Veach 1997, §9.2).  The same weight serves
-        hemisphere rays and portal samples (see :meth:`_portal_samples`)."""
-        p_h = S * np.maximum(np.einsum("ij,ij->i", normals, directions), 0.0) / np.pi
-        p_p = n_p * np.asarray(density, np.float64)
-        return np.where(p_p > 0.0, p_h / np.maximum(p_h + p_p, 1e-300), 1.0)
-
-    def _portal_samples(self, P, Ns, Ng, S, n_p, rng, origins=None):
-        """Light through the portals seen from (P, Ns): the paper's §5 advice that large
-        sources belong in the indirect step, sampled well.
-
-        Each point gets ``n_p`` (about ``PORTAL_SAMPLE_FRACTION · S``) points on the
-        portals — portal glass and the openings of ``[[portals]]`` — stratified over their
-        area.  A sample on portal glass counts only if the first surface its ray meets is
-        the portal triangle it was drawn on; through the pane it carries τ(θ) and
-        continues like any ray (sky, ground, deeper levels).  A sample on an opening
-        counts only if nothing lies between the point and it; its ray goes on from the
-        point like any ray, since openings are invisible to every other ray.
-        Hemisphere rays and portal samples are combined by the balance heuristic of
-        multiple importance sampling (Veach, "Robust Monte Carlo Methods for Light
-        Transport Simulation", 1997, §9.2): a sample in direction ω counts
-        f(ω) / (S p_h + n_p p_p) with p_h = cos θ / π and p_p the portal density
-        (:meth:`_portal_density`), so cosine sampling carries the light near a window and
-        area sampling the small distant windows.  Values are scaled by S/π to join the
-        hemisphere sums of Eq. 2, which makes a sample's factor the weight S p_h /
-        (S p_h + n_p p_p) of :meth:`_hemisphere_weight`.
-
-        Returns ``(known, hits, owner)`` like the hemisphere part.
-        """
-        r = len(P)
-        tri, x, pdf_area, n_p = self.portals.sample_stratified(rng, r, n_p)
-        owner = np.repeat(np.arange(r), n_p)
-        o = np.repeat(self.tracer.offset(P, Ng) if origins is None else origins, n_p, axis=0)
-        w = x - o
-        dist = np.linalg.norm(w, axis=1)
-        w /= np.maximum(dist, 1e-300)[:, None]
-        cos_r = np.einsum("ij,ij->i", Ns[owner], w)
-        usable = (cos_r > 0.0) & (dist > 0.0)
-        target = self.context.portal_prim[tri]
-        known = np.zeros((r, 3))
-        keys = ("P", "Ns", "Ng", "weight")
-        parts, owners = [], []
-
-        def add(use, radiance, p_hits, weight):
-            for c in range(3):
-                known[:, c] += np.bincount(owner[use], radiance[:, c] * weight, minlength=r)
-            if len(p_hits["ray"]):
-                parts.append({**{key: p_hits[key] for key in keys[:3]},
-                              "weight": p_hits["weight"] * weight[p_hits["ray"], None]})
-                owners.append(owner[use][p_hits["ray"]])
-
-        # portal glass: through the pane drawn on, if it is the first surface met
-        use = np.flatnonzero(usable & (target >= 0))
-        if len(use):
-            hits = self.tracer.intersect(o[use], w[use])
-            first = hits.prim == target[use]
-            use = use[first]
-            if len(use):
-                sub = Hits(hits.t[first], hits.prim[first])
-                Pp, Ngp, _ = self.tracer.surface(o[use], w[use], sub, np.arange(len(use)))
-                cos_p = np.einsum("ij,ij->i", self.tracer.normals[sub.prim], w[use])
-                tau = self.materials.glass_transmittance(self.scene.triangles.material[sub.prim], cos_p)
-                density = self._portal_density(w[use], sub.t, prim=sub.prim, origins=o[use])
-                weight = self._hemisphere_weight(Ns[owner[use]], w[use], density, S, n_p)
-                _, radiance, p_hits, _ = self.trace_paths(self.tracer.offset(Pp, -Ngp), w[use], rng, through=tau)
-                add(use, radiance, p_hits, weight)
-        # openings: unobstructed up to the point drawn, then on like any ray
-        use = np.flatnonzero(usable & (target < 0))
-        if len(use):
-            _, radiance, p_hits, weight = self.trace_paths(o[use], w[use], rng,
-                                                           portal_mis=(Ns[owner[use]], S, n_p, dist[use]))
-            add(use, radiance, p_hits, weight)
-        if not parts:
-            return known, {key: np.zeros((0, 3)) for key in keys}, np.zeros(0, np.int64)
-        hits = {key: np.concatenate([part[key] for part in parts]) for key in keys}
-        return known, hits, np.concatenate(owners)
 
     def _trace_records(self, k, q: _Queries, pending: _Pending, key: int, run: RunPlan):
         """:meth:`_evaluate_hemispheres` for new records of level k at the queries ``q``, in

@@ -1,7 +1,7 @@
 """Unglazed openings found in the geometry, to be sampled as window portals.
 
 The paper's §5 puts large sources such as the sky seen through a window into the indirect
-calculation, to be sampled well; :mod:`lbl_illum.engine.integrator` samples the area of every
+calculation, to be sampled well; :mod:`lbl_illum.engine.portal_sampling` samples the area of every
 portal by multiple importance sampling.  Glass is a portal by itself; an *unglazed*
 opening is a hole in the geometry, which a modeller does not think of drawing.  A hole is
 found here the way a modeller makes one — cut out of a wall or a roof:

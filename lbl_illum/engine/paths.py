@@ -27,7 +27,7 @@ The two places where grids and images legitimately differ are the :class:`PathPo
 nothing else about a path depends on who traced it.  Weak branches play Russian
 roulette (Arvo & Kirk 1990) below the policy's throughput floor.  Window-portal
 weights of hemisphere rays (multiple importance sampling, Veach 1997 §9.2; see
-:meth:`lbl_illum.engine.integrator.Integrator._portal_samples`) enter through a hook
+:mod:`lbl_illum.engine.portal_sampling`) enter through a hook
 (:class:`PortalWeights`) called at the first hit and at portal glass.
 
 Units: lengths [m], luminance [cd/m²].

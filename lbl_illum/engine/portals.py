@@ -2,7 +2,7 @@
 and which way each faces.
 
 The paper's §5 puts large sources such as the sky seen through a window into the indirect
-step, sampled well; :class:`~lbl_illum.engine.integrator.Integrator` does so by multiple
+step, sampled well; :mod:`lbl_illum.engine.portal_sampling` does so by multiple
 importance sampling over the portals of this module.  A portal is worth its samples only
 where the sky lies behind it, and only for what lies in front of it:
 

@@ -39,7 +39,7 @@ normal incidence; ``model`` says how it changes with the angle of incidence θ:
 
 ``portal = true`` marks a window whose area the indirect calculation samples directly
 (the paper's §5: large sources such as the sky seen through a window belong in the
-indirect step, sampled well); see :mod:`lbl_illum.engine.integrator` and docs/windows.md.
+indirect step, sampled well); see :mod:`lbl_illum.engine.portal_sampling` and docs/windows.md.
 Glass is a portal by default where the sky lies behind it (``portal = "auto"``,
 :data:`DEFAULT_GLASS_PORTAL`; :mod:`lbl_illum.engine.portals`).
 

@@ -398,7 +398,7 @@ def _materials(table: Mapping[str, Any] | None, where: str, warnings: list[str])
     A reflectance of exactly 1 (diffuse or mirror) is accepted with a warning: such a
     surface absorbs nothing, so the interreflections in a closed room form a series that
     does not converge; every run stops it at a finite depth (``bounces`` diffuse levels,
-    at most :data:`MAX_BOUNCES`, and :data:`lbl_illum.engine.integrator.MAX_SPECULAR_DEPTH` specular
+    at most :data:`MAX_BOUNCES`, and :data:`lbl_illum.engine.paths.MAX_SPECULAR_DEPTH` specular
     interactions), so the result is finite but grows with ``bounces``.  A plastic with
     specularity above 0.1 or roughness above 0.2 (:data:`PLASTIC_REALISTIC`) is accepted
     with a warning too.

@@ -5,7 +5,7 @@ calculation, where they should be sampled well.  A window seen from the back of 
 room subtends a small solid angle, so the hemisphere rays of a record there (and of
 the records on the walls and ceiling whose light reaches the back) rarely find it;
 portal sampling draws directions through the window's area and combines them with the
-hemisphere rays by multiple importance sampling (``Integrator._portal_samples``).
+hemisphere rays by multiple importance sampling (``lbl_illum.engine.portal_sampling``).
 
 The room is 4 m wide, 12 m deep and 3 m high, with one 3 × 1.5 m window in the south
 wall (sill 1 m), floor ρ 0.2, walls 0.5, ceiling 0.7, an outside ground of 0.2, under a
