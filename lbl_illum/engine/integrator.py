@@ -34,13 +34,10 @@ So results do not depend on the order of the queries, and a rerun from a saved c
 is identical.  Python loops only over levels and passes; rays, records and queries are
 arrays.
 
-**Record radius.**  R_i is the harmonic mean distance of Eq. 4, limited by
-E/|∇_t E| of the light known when the record's rays are traced (sky and ground seen
-directly or through windows; see :meth:`Integrator._known_gradient_limit`), then clamped to [min_spacing, max_spacing + δ(P_i)], δ being
-the distance from P_i to the box around the query points: far from every query, a
-record is seen under a small solid angle and may grow in proportion (a level-of-detail
-rule of this project; it keeps a kilometre-wide ground from costing records, where a
-limit tied to the scene's bounding box makes records as large as rooms).
+**Record radius** (:mod:`lbl_illum.engine.sizing`).  R_i is the harmonic mean distance
+of Eq. 4, limited by E/|∇_t E| of the light that makes a room non-uniform (known when
+the record's rays are traced), then clamped to [min_spacing, max_spacing + δ(P_i)], δ
+being the distance from P_i to the box around the query points.
 
 **Portal samples** (:mod:`lbl_illum.engine.portal_sampling`).  Records behind the
 windows also sample the portals' area, combined with their hemisphere rays by multiple
@@ -60,15 +57,14 @@ from .cache import IrradianceCache, LevelRecords
 from .context import LightingContext
 from .fingerprint import record_settings, scene_fingerprint
 from .gradients import irradiance_gradients, limit_gradients
-from .hemisphere import cell_counts, cosine_directions, orthonormal_basis, stratified_directions
-from .hessian import MAX_ANISOTROPY, hessian_radii, irradiance_hessian, leak_sectors
-from .lambert import portal_irradiance
+from .hemisphere import cell_counts, cosine_directions, stratified_directions
 from ..scene.materials import russian_roulette
 from ..options import Options
 from .placement import distance_bands, pick_per_cell
 from ..photometry import luminance
 from .portal_sampling import portal_sample_plan, portal_samples, trace_hemisphere_rays
 from .raycast import Tracer
+from .sizing import RecordSizing
 from ..scene.scenefile import Scene
 
 __all__ = ["IlluminanceResult", "RunPlan", "RunStats", "Integrator", "scene_fingerprint",
@@ -86,9 +82,6 @@ QUERY_LIGHT_SAMPLES = 16
 #: error against a converged reference: 12,043 against 5,026 level-2 records.)
 MAX_SPACING_FRACTION = 0.5
 SPACING_RATIO = 16.0
-#: Rays that reach the sky count as hits this many times the largest record spacing away
-#: in the Hessian of a record's hemisphere (:func:`~lbl_illum.engine.hessian.irradiance_hessian`).
-HESSIAN_FAR = 1e4
 #: Passes of placement before all remaining uncovered queries are taken at once.
 MAX_PASSES = 64
 #: Hemisphere rays traced in one batch: the records of a pass are traced in blocks of at
@@ -141,14 +134,6 @@ def _compact(keep, todo, P, N, band):
                 N2[j, c] = N[i, c]
             j += 1
     return todo2, P2, N2, band2
-
-
-def _harmonic_mean_distance(first_t, r, S):
-    """(r,) R_0 of Eq. 4: the harmonic mean of each record's S first-hit distances (rays
-    to the sky count 1/∞ = 0; a record whose every ray escapes has R_0 = ∞)."""
-    inv = np.where(np.isfinite(first_t), 1.0 / np.maximum(first_t, 1e-300), 0.0).reshape(r, S).sum(axis=1)
-    with np.errstate(divide="ignore"):
-        return np.where(inv > 0, S / np.maximum(inv, 1e-300), np.inf)
 
 
 @dataclass
@@ -394,7 +379,7 @@ class Integrator:
     def _evaluate_hemispheres(self, k, q: _Queries, pending: _Pending, rng, run: RunPlan):
         """Trace the hemispheres of new records at the queries ``q``; return their radii
         R_i (clamped), the shapes W_i of elliptical domains and the leak sectors (both None
-        for round domains)."""
+        for round domains), as :meth:`lbl_illum.engine.sizing.RecordSizing.radii` sizes them."""
         P, Ns, Ng = q.P, q.Ns, q.Ng
         samples = self.options.level_samples(k)
         m, n = cell_counts(samples)
@@ -459,12 +444,12 @@ class Integrator:
             pending.hit_ray.append(hit_ray.astype(np.int32))
         pending.known.append(known)
         pending.samples.append(np.full(r, S))
-        if self.hessian and self.cache.levels[k].accuracy > 0:
-            return self._hessian_domains(k, P, Ns, dirs, radiance, first_t, m, n, run)
-        R0 = _harmonic_mean_distance(first_t, r, S)
-        if self.cache.levels[k].accuracy > 0 and self.gradient_limit:
-            R0 = np.minimum(R0, self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n, run)[0])
-        return self._clamp_radius(R0, P, run), None, None
+        return self._sizing(k, run).radii(P, Ns, dirs, radiance, first_t, m, n)
+
+    def _sizing(self, k, run: RunPlan) -> RecordSizing:
+        """How this run sizes the new records of level k (:class:`~lbl_illum.engine.sizing.RecordSizing`)."""
+        return RecordSizing(self.context, self.cache.levels[k].accuracy, run.min_spacing, run.max_spacing, run.roi,
+                            run.portal_luminance, run.interreflected(k), self.gradient_limit, self.hessian)
 
     def _path_level(self, k) -> bool:
         """Level k follows one ray per record (accuracy 0 below the first reflection)."""
@@ -490,108 +475,6 @@ class Integrator:
         factor = scaled[keep, 0] / child[keep]
         return keep, weight[keep] * factor[:, None].astype(weight.dtype), child[keep] * factor
 
-    def _light_limit(self, k, P, Ns, dirs, radiance, first_t, m, n, run: RunPlan):
-        """R_i ≤ E/|∇_t E| (Ward & Heckbert 1992) for the light that makes a room's
-        illuminance non-uniform, sized without the record's own samples of it.
-
-        A record's domain must not depend on the noise of its own value: where it does,
-        records that happened to catch more of a small bright source get smaller domains
-        and serve fewer queries than their neighbours that caught less, and interpolation
-        reads low (docs/architecture.md, "Record domains").  So for records behind the
-        windows (:meth:`lbl_illum.engine.portals.PortalSet.inside`) E and ∇E are Lambert's closed
-        form for the portals, unoccluded (:func:`lbl_illum.engine.lambert.portal_irradiance`),
-        with the interreflected light the bounces still to come add
-        (:meth:`RunPlan.interreflected`) in E; elsewhere — the ground and the buildings outside,
-        lit by the open sky, whose estimate from the record's rays is not dominated by a
-        few of them — the light its rays found (:meth:`_known_gradient_limit`).
-
-        Returns ``(limit, terms, behind)``: (r,) [m]; the (r, 6) terms of Lambert's form
-        (E, gradient, Hessian; zero rows outside) for the Hessian's domains; (r,) bool, the
-        records behind the windows.
-        """
-        r = len(P)
-        behind = self.portal_set.inside(P) if self.portals is not None else np.zeros(r, bool)
-        terms = np.zeros((r, 6))
-        limit = np.full(r, np.inf)
-        if (~behind).any():
-            out = np.flatnonzero(~behind)
-            sel = (np.repeat(~behind, m * n))
-            limit[out] = self._known_gradient_limit(Ns[out], dirs[sel], radiance[sel], first_t[sel], m, n)
-        if behind.any():
-            terms[behind] = self._window_terms(P[behind], Ns[behind], k, run)
-            g = np.hypot(terms[behind, 1], terms[behind, 2])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                limit[behind] = np.where(g > 0, terms[behind, 0] / g, np.inf)
-        return limit, terms, behind
-
-    def _window_terms(self, P, Ns, k, run: RunPlan):
-        """(r, 6) the portals' light at records of level k: Lambert's E (plus the
-        interreflected estimate of :meth:`RunPlan.interreflected`), its gradient and Hessian
-        in the tangent plane (:func:`lbl_illum.engine.lambert.portal_irradiance`)."""
-        t = portal_irradiance(P, Ns, orthonormal_basis(Ns), self.portals.vertices, run.portal_luminance,
-                              self.portal_set.outward)
-        t[:, 0] += run.interreflected(k)
-        return t
-
-    def _hessian_domains(self, k, P, Ns, dirs, radiance, first_t, m, n, run: RunPlan):
-        """Elliptical record domains (``interpolation = "hessian"``): the Hessian radii of
-        Schwarzhaupt, Jensen & Jarosz (2012; :func:`~lbl_illum.engine.hessian.hessian_radii`)
-        of the light that shapes the room, sized without the record's own samples of it,
-        as :meth:`_light_limit` explains: behind the windows the portals' light in closed
-        form, its E raised by the interreflected estimate, and the short radius at most
-        the harmonic mean distance R_0 of Eq. 4 (the long one 2 R_0), which the closed form
-        knows nothing of; elsewhere the Hessian of the light the record's rays found
-        (:func:`~lbl_illum.engine.hessian.irradiance_hessian`: luminance scaled to a mean of
-        0.99 and raised by 0.01, all 1 where none is known, Radiance 5's rule).  Both
-        radii are then limited by :meth:`_light_limit` and clamped, and the leak sectors
-        found (:func:`~lbl_illum.engine.hessian.leak_sectors`).  Returns (R, W, leak) with R
-        the long radius.
-        """
-        r, S = len(P), m * n
-        accuracy = self.cache.levels[k].accuracy
-        limit, terms, behind = self._light_limit(k, P, Ns, dirs, radiance, first_t, m, n, run)
-        if (~behind).any():
-            out = np.flatnonzero(~behind)
-            Y = luminance(radiance).reshape(r, S)[out]
-            total = Y.sum(axis=1)
-            lit = total > 0.0
-            scale = np.where(lit, 0.99 * S / np.where(lit, total, 1.0), 0.0)
-            values = np.where(lit[:, None], Y * scale[:, None] + 0.01, 1.0).reshape(-1, m, n)
-            terms[out] = irradiance_hessian(Ns[out], dirs.reshape(r, m, n, 3)[out], values,
-                                            first_t.reshape(r, m, n)[out], HESSIAN_FAR * run.max_spacing)
-        R_s, R_l, axis = hessian_radii(Ns, terms, accuracy)
-        R0 = _harmonic_mean_distance(first_t, r, S)
-        R_s = np.where(behind, np.minimum(R_s, R0), R_s)
-        R_l = np.where(behind, np.minimum(R_l, 2.0 * R0), R_l)
-        R_s, R_l = np.minimum(R_s, limit), np.minimum(R_l, limit)
-        R_s = self._clamp_radius(R_s, P, run)
-        R_l = np.minimum(np.maximum(self._clamp_radius(R_l, P, run), R_s), MAX_ANISOTROPY * R_s)
-        W = axis * np.sqrt(np.maximum((R_l / R_s) ** 2 - 1.0, 0.0))[:, None]
-        leak = leak_sectors(Ns, dirs.reshape(r, S, 3), first_t.reshape(r, S), accuracy * R_s, accuracy * R_l,
-                            axis, n)
-        return R_l, W, leak
-
-    def _known_gradient_limit(self, normals, dirs, radiance, first_t, m, n):
-        """R_i ≤ E / |∇_t E| (Ward & Heckbert 1992, §3) for the part of each record's
-        value known when its rays are traced: sky, ground glow and light seen by
-        reflection, through windows included.  That part is what makes daylit rooms
-        non-uniform (the split sphere of Eq. 3 assumes uniform light), and it is known
-        before the levels below are evaluated.  Records with no known light: no limit.
-        """
-        r = len(normals)
-        Y = luminance(radiance).reshape(r, m, n)
-        E = np.pi / (m * n) * Y.sum(axis=(1, 2))
-        limit = np.full(r, np.inf)
-        lit = np.flatnonzero(E > 0)       # the gradients of unlit records are not computed
-        if len(lit) == 0:
-            return limit
-        _, trans = irradiance_gradients(normals[lit], dirs.reshape(r, m, n, 3)[lit], Y[lit, ..., None],
-                                        first_t.reshape(r, m, n)[lit])     # one channel: luminance
-        g = np.linalg.norm(trans[:, 0, :], axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            limit[lit] = np.where(g > 0, E[lit] / g, np.inf)
-        return limit
-
     def _trace_records(self, k, q: _Queries, pending: _Pending, key: int, run: RunPlan):
         """:meth:`_evaluate_hemispheres` for new records of level k at the queries ``q``, in
         blocks of at most ``MAX_BATCH_RAYS`` rays; block b's random stream is keyed by
@@ -606,15 +489,6 @@ class Integrator:
             parts.append(self._evaluate_hemispheres(k, q.take(block), pending, rng, run))
             self._tick(run)
         return tuple(None if part[0] is None else np.concatenate(part) for part in zip(*parts))
-
-    @staticmethod
-    def _clamp_radius(R0, P, run: RunPlan):
-        """R_i clamped to [min_spacing, max_spacing + δ(P_i)], δ the distance [m] from P_i to
-        the box around the run's query points (the module docstring, "Record radius")."""
-        lo_box, hi_box = run.roi
-        outside = np.maximum(0.0, np.maximum(lo_box - P, P - hi_box))
-        far = np.linalg.norm(outside, axis=1)
-        return np.clip(R0, run.min_spacing, run.max_spacing + far)
 
     def place_level(self, k, q: _Queries, run: RunPlan):
         """Make the records of level k that the queries ``q`` need.

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from lbl_illum import Options, compute_illuminance, load_scene, read_points
-from lbl_illum.engine.hemisphere import stratified_directions
 from lbl_illum.engine.integrator import Integrator
 
 from conftest import DOWN, EXAMPLES, GROUND, PLASTIC_FLOOR, UNIFORM_SKY, make_scene, plastic_floor_reference
@@ -250,30 +249,6 @@ def test_sensor_one_millimetre_from_a_large_wall_sees_the_wall():
     result = compute_illuminance(scene, np.array([[0.0, -1e-3, 50.0]]), np.array([[0.0, 1.0, 0.0]]),
                                  Options(bounces=1, samples=256))
     assert result.illuminance[0] == pytest.approx(0.5 * E_wall, rel=2e-3)
-
-
-def test_known_gradient_limit_skips_unlit_records_and_keeps_the_lit_ones():
-    """Records whose rays found no light at trace time get no limit (∞) without their
-    gradients being computed; a lit record's limit does not depend on the unlit ones
-    traced with it (the sphere on its plane has no sky, so none of its records is lit)."""
-    scene = make_scene([GROUND], {"ground": {"type": "diffuse", "reflectance": 0.2}},
-                       sky={"type": "cie-overcast", "horizontal_illuminance": 10000.0})
-    integ = Integrator(scene, Options(bounces=1))
-    m, n = 4, 12
-    rng = np.random.default_rng(3)
-    normals = np.array([[0.0, 0.0, 1.0], [0.0, 0.6, 0.8], [1.0, 0.0, 0.0]])
-    dirs = stratified_directions(normals, m, n, rng).reshape(-1, 3)
-    t = rng.uniform(0.5, 5.0, len(dirs))
-    radiance = np.repeat(rng.uniform(0.0, 100.0, (len(dirs), 1)), 3, axis=1)
-    radiance[m * n: 2 * m * n] = 0.0                      # the second record saw nothing
-    both = integ._known_gradient_limit(normals, dirs, radiance, t, m, n)
-    assert np.isinf(both[1]) and np.all(np.isfinite(both[[0, 2]]))
-    for i in (0, 2):
-        alone = integ._known_gradient_limit(normals[i:i + 1], dirs[i * m * n:(i + 1) * m * n],
-                                            radiance[i * m * n:(i + 1) * m * n], t[i * m * n:(i + 1) * m * n], m, n)
-        assert alone[0] == pytest.approx(both[i], rel=1e-12)
-    dark = integ._known_gradient_limit(normals, dirs, np.zeros_like(radiance), t, m, n)
-    assert np.all(np.isinf(dark))
 
 
 def test_records_traced_in_blocks_give_the_same_records_and_comparable_values(sphere_scene, monkeypatch):
