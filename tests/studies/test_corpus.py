@@ -56,3 +56,17 @@ def test_cases_without_a_reference_are_named_not_measured():
     assert "**Not measured** (no converged reference yet): cabin-sunny" in text
     assert report.results["targets"]["unmeasured"] == ["cabin-sunny"]
     assert report.results["targets"]["bias_missed"] == []
+
+
+def test_seed_summary_means_the_seeds_and_states_the_spread():
+    runs = [{"seconds": s, "compute_seconds": s - 1, "records": 10 * s, "rays": 100 * s, "bias": b,
+             "mean": abs(b) + 0.01, "max": 0.05 + b} for s, b in ((2.0, 0.02), (4.0, -0.01), (6.0, 0.002))]
+    got = corpus.seed_summary(runs)
+    assert got["seeds"] == 3 and got["seconds"] == pytest.approx(4.0) and got["records"] == 40
+    assert got["bias"] == pytest.approx(0.004, abs=1e-15)
+    sd = np.sqrt(((0.016 ** 2) + (0.014 ** 2) + (0.002 ** 2)) / 2)          # sample standard deviation
+    assert got["bias_spread"] == pytest.approx(sd, rel=1e-12)
+    assert got["bias_standard_error"] == pytest.approx(sd / np.sqrt(3), rel=1e-12)
+    assert got["max_error"] == pytest.approx(0.07) and got["mean_error"] == pytest.approx(0.01 + 0.032 / 3)
+    one = corpus.seed_summary(runs[:1])
+    assert one["bias"] == 0.02 and one["bias_spread"] == 0.0 and one["seeds"] == 1
