@@ -12,9 +12,11 @@ from __future__ import annotations
 import importlib
 
 
-def public_surface(package: str, exports: dict[str, tuple[str, ...]]):
-    """``(__all__, __getattr__, __dir__)`` for the package ``package`` whose public names are
-    ``exports`` (module name inside the package -> names it defines)."""
+def public_surface(namespace: dict, exports: dict[str, tuple[str, ...]]):
+    """``(__all__, __getattr__, __dir__)`` for the package whose ``globals()`` is
+    ``namespace`` and whose public names are ``exports`` (module name inside the package ->
+    names it defines)."""
+    package = namespace["__name__"]
     where = {name: module for module, names in exports.items() for name in names}
     if len(where) != sum(len(names) for names in exports.values()):
         raise ValueError(f"{package}: a public name is listed twice")
@@ -24,15 +26,10 @@ def public_surface(package: str, exports: dict[str, tuple[str, ...]]):
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         value = getattr(importlib.import_module(f"{package}.{module}"), name)
-        globals_of(package)[name] = value          # later lookups skip this function
+        namespace[name] = value          # later lookups skip this function
         return value
 
     def __dir__():
-        return sorted(set(globals_of(package)) | set(where))
+        return sorted(set(namespace) | set(where))
 
     return sorted(where), __getattr__, __dir__
-
-
-def globals_of(package: str) -> dict:
-    """The namespace of the (imported) package ``package``."""
-    return vars(importlib.import_module(package))

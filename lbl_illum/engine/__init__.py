@@ -8,7 +8,7 @@ Lengths are metres, illuminance lux, luminance cd/m²."""
 from .._public import public_surface
 
 #: The public names of this layer, by module (imported when first used).
-__all__, __getattr__, __dir__ = public_surface(__name__, {
+__all__, __getattr__, __dir__ = public_surface(globals(), {
     "context": ("LightingContext",),
     "integrator": ("Integrator", "IlluminanceResult", "RunStats", "QUERY_LIGHT_SAMPLES"),
     "cache": ("IrradianceCache", "LevelRecords"),

@@ -5,7 +5,7 @@ export with rtrace cross-checks."""
 from .._public import public_surface
 
 #: The public names of this layer, by module (imported when first used).
-__all__, __getattr__, __dir__ = public_surface(__name__, {
+__all__, __getattr__, __dir__ = public_surface(globals(), {
     "points": ("read_points", "write_points", "read_results", "write_results"),
     "files": ("atomic_write_bytes", "atomic_write_text"),
     "images": ("read_image", "write_image", "write_png", "preview_pixels"),

@@ -6,7 +6,7 @@ metres on the way in; nothing here traces a ray."""
 from .._public import public_surface
 
 #: The public names of this layer, by module (imported when first used).
-__all__, __getattr__, __dir__ = public_surface(__name__, {
+__all__, __getattr__, __dir__ = public_surface(globals(), {
     "scenefile": ("Scene", "load_scene", "scene_from_dict"),
     "geometry": ("Triangles", "box_triangles", "polygon_triangles", "rectangle_triangles", "sphere_triangles"),
     "materials": ("Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING"),
