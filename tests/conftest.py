@@ -161,3 +161,23 @@ def office_cache(office_quarter, tmp_path_factory):
     path = tmp_path_factory.mktemp("saved") / "office.lblcache"
     integ.cache.save(path)
     return path, integ
+
+
+def ies_text(fn, horizontal, vertical=np.arange(0, 180.1, 2.5), version="IESNA:LM-63-2002", units=2,
+             dims=(0, 0, 0), multiplier=1.0, ballast=1.0, lumens=-1, ptype=1, tilt="TILT=NONE", per_line=10):
+    """The text of an IES LM-63 file of the distribution ``fn(vertical, horizontal)`` [cd]
+    tabulated on the given angles [deg] (tests of photometric files and luminaires)."""
+    H, V = np.meshgrid(horizontal, vertical, indexing="ij")
+    values = fn(V, H)
+    lines = [version, "[TEST] lbl_illum test", "[MANUFAC] none", tilt,
+             f"1 {lumens} {multiplier} {len(vertical)} {len(horizontal)} {ptype} {units} {dims[0]} {dims[1]} {dims[2]}",
+             f"{ballast} 1.0 30"]
+
+    def wrap(numbers):
+        numbers = [f"{x:.6g}" for x in numbers]
+        return [" ".join(numbers[i:i + per_line]) for i in range(0, len(numbers), per_line)]
+
+    lines += wrap(vertical) + wrap(horizontal)
+    for row in values:
+        lines += wrap(row)
+    return "\n".join(lines) + "\n"

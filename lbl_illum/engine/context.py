@@ -81,7 +81,7 @@ class LightingContext:
         """The context of ``scene``: its tracer, direct light and portals, built once."""
         materials: MaterialTable = scene.material_table
         tracer = Tracer(scene.triangles, materials.kind, materials.transmittance)
-        direct = DirectLight(tracer, materials, scene.sun)
+        direct = DirectLight(tracer, materials, scene.sun, scene.luminaires)
         # portal glass first, then openings (lbl_illum.engine.portals)
         portal_set = None if scene.sky.is_dark else build_portals(scene, tracer, materials,
                                                                   find=scene.find_openings)
@@ -188,12 +188,12 @@ class LightingContext:
         the geometry, panes left out because no sky lies behind them
         (:mod:`lbl_illum.engine.portals`), the direct calculation's own notes."""
         ps = self.portal_set
-        if ps is None:
-            return self.direct.notes()
         scene = self.scene
+        if ps is None:
+            return self.direct.notes(scene.unit_scale, scene.units)
         notes = [f"unglazed opening found, sampled as a portal: {o.describe(scene.unit_scale, scene.units)} "
                  "(find_openings = false to turn this off)" for o in ps.openings]
-        notes += self.direct.notes()
+        notes += self.direct.notes(scene.unit_scale, scene.units)
         if ps.dropped:
             notes.append(f"{ps.dropped} glass {'triangle is' if ps.dropped == 1 else 'triangles are'} not sampled as "
                          "a portal: no sky behind them (portal = true on the material samples them anyway)")

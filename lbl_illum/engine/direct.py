@@ -16,10 +16,11 @@
   :data:`MAX_MIRROR_SAMPLES`.
 * The sun's highlight on rough plastic (:meth:`DirectLight.sun_highlight`): the luminance
   a path sees at a glossy hit, by one shadow ray toward the disk.
-* Light surfaces (Lambertian emitters, two-sided): area sampling,
-  E = (1/n) Σ L cos θ_r cos θ_l / d² / p_A, with triangles chosen in proportion to
-  area × luminance and points uniform on them (Pharr, Jakob & Humphreys,
-  *Physically Based Rendering*, 4th ed., §12.2 and §6.5).
+* Light surfaces (Lambertian emitters, two-sided): the closed form of what a point would
+  see of them with nothing in the way, less a shadow-ray estimate of the part hidden
+  (:mod:`lbl_illum.engine.emitters`).
+* Luminaires of photometric files: point sources, I(ω) cos θ / d² by one shadow ray each
+  (:mod:`lbl_illum.engine.luminaires`).
 
 The indirect calculation never counts these sources again: a hemisphere ray that
 reaches a light surface or the sun directly contributes nothing (paper §5), nor one that
@@ -30,8 +31,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scene.geometry import TriangleSampler
 from ..scene.materials import LIGHT, MaterialTable, ward_brdf
+from .emitters import LightSurfaces
+from .luminaires import LuminaireLight
 from .raycast import Tracer, through_panes
 from ..daylight.sun import SUN_COS_HALF_ANGLE, Sun
 from .sunmirrors import NOTE_SHARE, SunMirrors
@@ -72,7 +74,7 @@ def _concentric(a, b):
 class DirectLight:
     """Shadow-ray estimates of direct illuminance at arrays of points."""
 
-    def __init__(self, tracer: Tracer, materials: MaterialTable, sun: Sun | None):
+    def __init__(self, tracer: Tracer, materials: MaterialTable, sun: Sun | None, luminaires=()):
         self.tracer = tracer
         self.materials = materials
         self.sun = sun if (sun is not None and sun.is_up) else None
@@ -80,23 +82,26 @@ class DirectLight:
         #: some glass of the scene transmits by the angle of incidence (Fresnel glazing)
         self._angular = bool(np.any(materials.fresnel[np.unique(tri.material)])) if len(tri) else False
         light_ids = np.flatnonzero(materials.kind[tri.material] == LIGHT)
-        self.lights = None
-        if len(light_ids):
-            self.light_luminance = materials.luminance[tri.material[light_ids]]
-            power = tri.areas[light_ids] * np.maximum(self.light_luminance.mean(axis=1), 0.0)
-            self.lights = TriangleSampler(tri, light_ids, power)
+        #: the light surfaces (None without any)
+        self.lights = LightSurfaces(tri, light_ids, materials.luminance) if len(light_ids) else None
+        #: the luminaires of photometric files (None without any)
+        self.luminaires = LuminaireLight(luminaires) if len(luminaires) else None
         #: the sun's images in flat mirrors and panes (:mod:`lbl_illum.engine.sunmirrors`)
         self.mirrors = SunMirrors(tracer, materials) if self.sun is not None else None
         if self.mirrors is not None and len(self.mirrors) == 0:
             self.mirrors = None
 
-    def notes(self) -> list[str]:
-        """What the user should hear of the direct light."""
+    def notes(self, unit_scale: float = 1.0, units: str = "m") -> list[str]:
+        """What the user should hear of the direct light: reflecting planes the sun's
+        images leave out, luminaires whose light meets a surface at once."""
+        out = []
         if self.mirrors is not None and self.mirrors.dropped_share > NOTE_SHARE:
-            return [f"the sun's reflection is followed in the {len(self.mirrors)} largest planes of mirrors, glass "
-                    f"and polished plastic; {self.mirrors.dropped} smaller planes "
-                    f"({100 * self.mirrors.dropped_share:.0f} % of their area) reflect no sun"]
-        return []
+            out.append(f"the sun's reflection is followed in the {len(self.mirrors)} largest planes of mirrors, glass "
+                       f"and polished plastic; {self.mirrors.dropped} smaller planes "
+                       f"({100 * self.mirrors.dropped_share:.0f} % of their area) reflect no sun")
+        if self.luminaires is not None:
+            out += self.luminaires.notes(self.tracer, unit_scale, units)
+        return out
 
     @property
     def has_lights(self) -> bool:
@@ -104,7 +109,7 @@ class DirectLight:
 
     @property
     def is_dark(self) -> bool:
-        return self.sun is None and not self.has_lights
+        return self.sun is None and not self.has_lights and self.luminaires is None
 
     def illuminance(self, points, shading_normals, geometric_normals, rng: np.random.Generator,
                     light_samples: int = 1, origins=None) -> np.ndarray:
@@ -148,8 +153,9 @@ class DirectLight:
                     E += self.mirrors.illuminance(origins, shading_normals, d, self.sun.direction,
                                                   self.sun.direct_normal_illuminance, self.transmittance) / m
         if self.has_lights:
-            for _ in range(light_samples):
-                E += self._light_sample(points, origins, shading_normals, rng) / light_samples
+            E += self.lights.illuminance(points, shading_normals, origins, rng, light_samples, self.transmittance)
+        if self.luminaires is not None:
+            E += self.luminaires.illuminance(points, shading_normals, origins, self.transmittance)
         return E
 
     def sun_highlight(self, d, P, Ng, Ns, mat, rng: np.random.Generator) -> np.ndarray:
@@ -244,22 +250,3 @@ class DirectLight:
                                 tmax=None if tmax is None else np.asarray(tmax, np.float64)[todo]).product
         T[todo] = np.where(T[todo] > 0.0, product, 0.0)
         return T
-
-    def _light_sample(self, points, origins, normals, rng):
-        n = len(points)
-        tri, x, pdf_area = self.lights.sample(rng, n)
-        w = x - origins
-        dist = np.linalg.norm(w, axis=1)
-        ok = dist > 0
-        w[ok] /= dist[ok, None]
-        cos_r = np.einsum("ij,ij->i", normals, w)
-        cos_l = np.abs(np.einsum("ij,ij->i", self.lights.normals[tri], w))
-        use = np.flatnonzero(ok & (cos_r > 0.0) & (cos_l > 0.0))
-        E = np.zeros((n, 3))
-        if len(use) == 0:
-            return E
-        geom = cos_r[use] * cos_l[use] / (dist[use] ** 2 * pdf_area[use])
-        tmax = dist[use] * (1.0 - 1e-6) - 1e-9
-        T = self.transmittance(origins[use], w[use], tmax)
-        E[use] = self.light_luminance[tri[use]] * geom[:, None] * T
-        return E

@@ -55,6 +55,15 @@ def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
         "options": (options.ambient, [options.level_accuracy(k) for k in range(options.bounces + 1)],
                     [options.level_samples(k) for k in range(options.bounces + 1)]),
     }
+    if scene.luminaires:
+        # their photometry, placement and multiplier (only when there are any, so that the
+        # fingerprints of scenes without luminaires are those of earlier versions)
+        for lum in scene.luminaires:
+            p = lum.photometry
+            for arr in (p.horizontal, p.vertical, p.candela, lum.position, lum.frame):
+                h.update(np.ascontiguousarray(arr, np.float64).tobytes())
+        desc["luminaires"] = [(lum.photometry.kind, lum.photometry.symmetry, lum.multiplier)
+                              for lum in scene.luminaires]
     desc["sizing"] = SIZING_VERSION
     if options.interpolation == "hessian":      # other record radii
         desc["domains"] = "hessian"
@@ -100,6 +109,9 @@ def record_settings(scene, options) -> dict:
         "level_accuracy": [options.level_accuracy(k) for k in range(B + 1)],
         "level_samples": [options.level_samples(k) for k in range(B + 1)],
     }
+    if scene.luminaires:
+        out["luminaires"] = [{"name": lum.name, "file": lum.photometry.name, "position": lum.position.tolist(),
+                              "aim": lum.aim.tolist(), "multiplier": lum.multiplier} for lum in scene.luminaires]
     return json.loads(json.dumps(out, default=plain_json))      # plain JSON types, as a file gives them back
 
 

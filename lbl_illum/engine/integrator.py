@@ -335,7 +335,7 @@ class Integrator:
     portals = property(lambda self: self.context.portals, doc="The portal triangles' sampler (or None).")
 
     def portal_notes(self) -> list[str]:
-        """What the user should hear of the portals (:meth:`LightingContext.notes`)."""
+        """What the user should hear of the portals and the direct light (:meth:`LightingContext.notes`)."""
         return self.context.notes()
 
     # -- bookkeeping ----------------------------------------------------------------

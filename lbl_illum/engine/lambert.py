@@ -78,6 +78,26 @@ def lambert_edge(acc, coef, p, q, nx, ny, nz, tx, ty, tz, bx, by, bz):
 
 
 @njit(cache=True, inline="always")
+def lambert_polygon(poly, m, nx, ny, nz):
+    """Signed projected solid angle [sr] of the polygon ``poly[:m]`` (vertices relative to
+    the receiver, wholly above its tangent plane) seen from a receiver of unit normal n:
+    Σ_edges ½ γ_e (n · ĉ_e), the value of :func:`lambert_edge` without its derivatives.
+    Positive when the polygon winds counter-clockwise seen from the receiver."""
+    total = 0.0
+    for a in range(m):
+        b = (a + 1) % m
+        r0x, r0y, r0z = poly[a, 0], poly[a, 1], poly[a, 2]
+        r1x, r1y, r1z = poly[b, 0], poly[b, 1], poly[b, 2]
+        cx, cy, cz = r0y * r1z - r0z * r1y, r0z * r1x - r0x * r1z, r0x * r1y - r0y * r1x
+        sc = np.sqrt(cx * cx + cy * cy + cz * cz)
+        if sc <= 0.0:
+            continue
+        gamma = np.arctan2(sc, r0x * r1x + r0y * r1y + r0z * r1z)
+        total += 0.5 * gamma * (nx * cx + ny * cy + nz * cz) / sc
+    return total
+
+
+@njit(cache=True, inline="always")
 def _clip_above(v, nx, ny, nz, out):
     """The part of triangle ``v`` (3, 3; relative to the receiver) above the receiver's
     tangent plane, into ``out`` (4, 3) by Sutherland–Hodgman; returns its vertex count."""

@@ -43,9 +43,11 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     atomic_write_bytes(path, text.encode("utf-8"))
 
 
-def read_text_file(path: str | os.PathLike, what: str = "") -> str:
+def read_text_file(path: str | os.PathLike, what: str = "", latin1: bool = False) -> str:
     """The UTF-8 text of a file; a missing, unreadable or non-UTF-8 file is an
-    :class:`InputError` naming it (and the line of the first bad byte)."""
+    :class:`InputError` naming it (and the line of the first bad byte).  ``latin1``:
+    text that is not UTF-8 is read as ISO 8859-1 instead (photometric files from older
+    tools carry a degree sign or a manufacturer's name in it)."""
     path = Path(path)
     name = path.name or str(path)
     try:
@@ -59,5 +61,7 @@ def read_text_file(path: str | os.PathLike, what: str = "") -> str:
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
+        if latin1:
+            return data.decode("latin-1")
         line = data.count(b"\n", 0, exc.start) + 1
         raise InputError(f"{name}: line {line}: not UTF-8 text (byte {exc.start})") from None

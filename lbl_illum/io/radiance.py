@@ -19,6 +19,11 @@ file                 contents
                      ``sphere`` s, and, for large scenes, one ``mesh`` primitive
 ``geometry.obj``,    the large-scene path: the plastic and glass triangles as a Wavefront
 ``geometry.rtm``     OBJ compiled by ``obj2mesh`` (far faster to ``oconv`` than polygons)
+``luminaires.rad``   the luminaires of photometric files: per luminaire a ``brightdata`` of
+                     its intensity table on a small ``light`` sphere, as ``ies2rad`` writes
+                     them (:func:`luminaire_description`; only when there are luminaires)
+``lum_N.dat``,       their intensity tables (Radiance data files [W/sr]) and the angles in
+``lbl_luminaires.cal`` each luminaire's frame
 ``points.pts``       the sensor points, ``x y z nx ny nz`` per line [m]
 ``README.txt``       the ``oconv`` and ``rtrace`` command lines that reproduce a run
 ===================  =================================================================
@@ -99,6 +104,11 @@ _OCTREE = "scene.oct"
 _POINTS = "points.pts"
 _CAL = "lbl_sky.cal"
 _GLAZING_CAL = "lbl_glazing.cal"
+_LUMINAIRES = "luminaires.rad"
+_LUMINAIRE_CAL = "lbl_luminaires.cal"
+#: Radius [m] of the ``light`` sphere a luminaire is drawn as (a point for its direct light:
+#: 1e-4 of the distance at 5 m).
+LUMINAIRE_RADIUS = 0.0005
 
 
 # ---------------------------------------------------------------------------
@@ -385,6 +395,114 @@ def sky_description(sky, sun) -> tuple[str, str | None]:
 # ---------------------------------------------------------------------------
 # Ambient options
 # ---------------------------------------------------------------------------
+
+LUMINAIRE_CAL = """\
+{ lbl_luminaires.cal: the emission direction of a luminaire's ray in its own frame and its
+  photometric angles (lbl_illum/scene/photometric.py), written by lbl_illum.
+  A2..A10: the frame's rows x (C0), y (C90), z (up) in scene coordinates; the ray arrives
+  along D, so the light leaves along -D.  A1: W/sr per unit of the data file over the
+  sphere's projected area. }
+lbl_x = -(Dx*A2 + Dy*A3 + Dz*A4);
+lbl_y = -(Dx*A5 + Dy*A6 + Dz*A7);
+lbl_z = -(Dx*A8 + Dy*A9 + Dz*A10);
+lbl_gamma = acos(bound(-1, -lbl_z, 1)) / DEGREE;
+lbl_c = mod(atan2(lbl_y, lbl_x) / DEGREE, 360);
+lbl_bh = atan2(-lbl_y, -lbl_z) / DEGREE;
+lbl_bv = asin(bound(-1, lbl_x, 1)) / DEGREE;
+lbl_lum(v) = A1 * v;
+"""
+
+
+def luminaire_table(photometry) -> tuple[list[np.ndarray], np.ndarray]:
+    """The intensity table [cd] of a :class:`~lbl_illum.scene.photometric.Photometry` over
+    its whole domain, for a Radiance data file: ``(axes, values)``, axes the node angles
+    [deg] (type C: C over 0..360 and γ over 0..180, or γ alone for an axial one; type B:
+    H over −180..180 and V over −90..90), values (len(axes[0]), ...).  The planes a
+    symmetry implies are written out as mirror images of the file's nodes, and where the
+    table stops short of the domain a node 1e-3° past its edge and one at the domain's
+    edge carry 0, so Radiance's linear interpolation gives what ours does."""
+    p = photometry
+    pad = 1e-3
+    if p.kind == "B":
+        h = p.horizontal if p.symmetry != "lateral" else np.union1d(-p.horizontal, p.horizontal)
+        h_dom, v_dom = (-180.0, 180.0), (-90.0, 90.0)
+    else:
+        c = p.horizontal
+        if p.symmetry == "quadrant":
+            c = np.concatenate([c, 180.0 - c, 180.0 + c, 360.0 - c])
+        elif p.symmetry == "c0-c180":
+            c = np.concatenate([c, 360.0 - c])
+        elif p.symmetry == "c90-c270":
+            c = np.concatenate([c, np.mod(180.0 - c, 360.0)])
+        h = np.unique(np.round(np.concatenate([c, [0.0, 360.0]]) if p.symmetry != "axial" else c, 9))
+        h_dom, v_dom = (0.0, 360.0), (0.0, 180.0)
+
+    def padded(nodes, lo, hi):
+        inside = nodes.copy()
+        extra = []
+        if nodes[0] > lo + pad:
+            extra += [lo, nodes[0] - pad]
+        if nodes[-1] < hi - pad:
+            extra += [nodes[-1] + pad, hi]
+        return np.union1d(inside, extra)
+
+    v = padded(p.vertical, *v_dom)
+    if p.kind == "B":
+        h = padded(h, *h_dom)
+    V_in = (v >= p.vertical[0] - 1e-9) & (v <= p.vertical[-1] + 1e-9)
+    if p.kind == "C" and p.symmetry == "axial":
+        values = np.where(V_in, p.intensity(p.direction(np.zeros(len(v)), v)), 0.0)
+        return [v], values
+    H, Vg = np.meshgrid(h, v, indexing="ij")
+    values = p.intensity(p.direction(H.ravel(), Vg.ravel())).reshape(H.shape)
+    values[:, ~V_in] = 0.0
+    if p.kind == "B":
+        values[(h < -90.0 - 1e-9) | (h > 90.0 + 1e-9), :] = 0.0
+    return [h, v], values
+
+
+def _data_file(axes, values) -> str:
+    """A Radiance data file (``brightdata``): the number of dimensions, each axis as
+    ``0 0 n`` and its nodes, then the values, the last axis varying fastest."""
+    out = [f"{len(axes)}\n"]
+    for ax in axes:
+        out.append(f"0 0 {len(ax)}\n" + _wrapped(ax) + "\n")
+    out.append(_wrapped(np.asarray(values).ravel()) + "\n")
+    return "".join(out)
+
+
+def _wrapped(values, per_line: int = 6) -> str:
+    items = [f"{float(x):.9g}" for x in values]
+    return "\n".join(" ".join(items[i:i + per_line]) for i in range(0, len(items), per_line))
+
+
+def luminaire_description(luminaires) -> dict[str, str]:
+    """The files of the scene's luminaires (module text): ``luminaires.rad``, one data file
+    per luminaire and ``lbl_luminaires.cal``.  Each luminaire is a ``light`` sphere of
+    radius :data:`LUMINAIRE_RADIUS` at its photometric centre whose radiance along a ray
+    is I(ω) / (π r²) [W sr⁻¹ m⁻²], I from its data file [cd / 179]: what the sphere sends
+    along ω is then I(ω), a point source for every receiver beyond a few centimetres (the
+    same model as ours)."""
+    files = {_LUMINAIRE_CAL: LUMINAIRE_CAL}
+    text = [f"# written by lbl-illum {__version__}: luminaires as light spheres of radius "
+            f"{LUMINAIRE_RADIUS:g} m with brightdata intensity tables (W/sr = cd / {RADIANCE_EFFICACY:g})\n"]
+    for k, lum in enumerate(luminaires):
+        axes, values = luminaire_table(lum.photometry)
+        data = f"lum_{k}.dat"
+        files[data] = _data_file(axes, values)
+        args = ("lbl_bh lbl_bv" if lum.photometry.kind == "B" else
+                "lbl_gamma" if len(axes) == 1 else "lbl_c lbl_gamma")
+        scale = lum.multiplier / (RADIANCE_EFFICACY * math.pi * LUMINAIRE_RADIUS ** 2)
+        frame = " ".join(_g(x) for x in np.asarray(lum.frame).ravel())
+        name = radiance_name(f"lum_{k}")
+        text.append(f"# {lum.name}: {lum.photometry.name}, multiplier {lum.multiplier:g}\n"
+                    f"void brightdata {name}_dist\n{3 + len(args.split())} lbl_lum {data} {_LUMINAIRE_CAL} {args}\n"
+                    f"0\n10 {_g(scale)} {frame}\n"
+                    f"{name}_dist light {name}_light\n0\n0\n3 1 1 1\n"
+                    f"{name}_light sphere {name}\n0\n0\n4 {_rgb(lum.position)} {_g(LUMINAIRE_RADIUS)}\n\n")
+    files[_LUMINAIRES] = "".join(text)
+    return files
+
 
 def ambient_options(options, max_spacing: float | None = None, cube: float | None = None) -> list[str]:
     """The closest ``rtrace`` options to our quality options.
@@ -781,6 +899,10 @@ def export_radiance(scene, directory, points=None, normals=None, *, glass: str =
     amb = ambient_options(scene.options, max_spacing, cube)
 
     files = {"materials.rad": materials_text, "sky.rad": sky_text, "geometry.rad": "".join(geo)}
+    scene_files = list(_SCENE_FILES)
+    if scene.luminaires:
+        files.update(luminaire_description(scene.luminaires))
+        scene_files.append(_LUMINAIRES)
     if cal_text is not None:
         files[_CAL] = cal_text
     if any(m.kind == "glass" and glass_export(m, glass) == "brtdfunc-cal" for m in scene.materials):
@@ -789,7 +911,7 @@ def export_radiance(scene, directory, points=None, normals=None, *, glass: str =
         files["geometry.obj"] = obj_text
     if points is not None:
         files[_POINTS] = _rows("%.9g %.9g %.9g %.9g %.9g %.9g\n", np.hstack([points, normals]))
-    result = RadianceExport(directory=directory.resolve(), files=[], scene_files=list(_SCENE_FILES),
+    result = RadianceExport(directory=directory.resolve(), files=[], scene_files=scene_files,
                             points=_POINTS if points is not None else None, ambient_options=amb,
                             triangles=int(len(facets)), spheres=len(spheres), mesh=use_mesh)
     files["README.txt"] = _readme(scene, result, max_spacing, cube, glass)

@@ -1,6 +1,7 @@
 """The scene as the user describes it: scene files (TOML, with geometry from OBJ, PLY, STL,
 glTF and Radiance ``.rad`` files), triangle geometry and polygons in metres, materials and
-what they do with light, camera views, and length units.  Everything here is converted to
+what they do with light, luminaires and their photometric files, camera views, and length
+units.  Everything here is converted to
 metres on the way in; nothing here traces a ray."""
 
 from .._public import public_surface
@@ -12,4 +13,6 @@ __all__, __getattr__, __dir__ = public_surface(globals(), {
     "materials": ("Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING"),
     "views": ("View", "view_from_file", "view_from_string"),
     "units": ("metres_per_unit",),
+    "luminaires": ("Luminaire",),
+    "photometric": ("Photometry", "read_photometry"),
 })

@@ -7,7 +7,9 @@ tables, ``[sky]``, ``[sun]``, ``[site]``, ``[[portals]]`` entries, ``[settings]`
 :func:`lbl_illum.scene.views.views_from_table`; docs/images.md).
 A ``[[portals]]`` entry (``vertices = [[x, y, z], ...]``, optional ``name``) is a planar
 polygon over an unglazed opening: no ray sees it, and the indirect calculation samples
-its area like portal glass (docs/windows.md).  The daylight tables
+its area like portal glass (docs/windows.md).  ``[[luminaires]]`` entries place
+luminaires from photometric files (:mod:`lbl_illum.scene.luminaires`, docs/luminaires.md).
+The daylight tables
 (``[sky]``, ``[sun]``, ``[site]``, and a ``weather`` file named in ``[sky]``) are read by
 :func:`daylight_from_dict`; docs/daylight.md describes them.  A geometry entry either loads
 a file (``file``, relative to the scene file, with a default ``material`` and a ``materials``
@@ -49,6 +51,7 @@ from ..options import MAX_BOUNCES, Options, scene_defaults
 from ..daylight.sky import CIEGeneralSky, PerezSky, Sky, perez_sky_from_weather, sky_from_table
 from ..daylight.solar import day_of_year, read_epw, site_from_table, solar_position, to_utc
 from ..daylight.sun import Sun, sun_from_table, sun_position_at
+from .luminaires import luminaires_from_table
 from .units import metres_per_unit
 from .views import views_from_table
 
@@ -59,7 +62,7 @@ __all__ = ["Scene", "load_scene", "scene_from_dict", "daylight_from_dict", "SCHE
 SCHEMA = 1
 #: Keys allowed at the top of a scene file.
 TOP_LEVEL_KEYS = ("schema", "units", "geometry", "materials", "sky", "sun", "site", "portals", "find_openings",
-                  "settings", "views")
+                  "settings", "views", "luminaires")
 #: Keys of a ``[[portals]]`` entry.
 PORTAL_KEYS = ("vertices", "name")
 #: ``weather_values``: take the weather file's illuminances, or convert its irradiances.
@@ -86,6 +89,7 @@ class Scene:
     views : the ``[views.NAME]`` tables as :class:`~lbl_illum.scene.views.View` s (lengths in metres)
     find_openings : look for unglazed openings in the geometry and sample them as portals
         (:mod:`lbl_illum.engine.openings`; the scene file's ``find_openings``, default true)
+    luminaires : the ``[[luminaires]]`` (:class:`~lbl_illum.scene.luminaires.Luminaire`)
     """
 
     triangles: Triangles
@@ -100,6 +104,7 @@ class Scene:
     portals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
     views: dict = field(default_factory=dict)
     find_openings: bool = True
+    luminaires: list = field(default_factory=list)
 
     @property
     def material_table(self) -> MaterialTable:
@@ -188,9 +193,10 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
         raise InputError(f"{where}: 'find_openings' must be true or false, got {show(find_openings)}")
     views = _no_overflow(lambda: views_from_table(data.get("views"), where, scale), f"{where}: [views]",
                          "the views")
+    luminaires = luminaires_from_table(data.get("luminaires"), where, base_dir, scale)
     return Scene(triangles=triangles, materials=materials, sky=sky, sun=sun, options=options,
                  units=units, unit_scale=scale, warnings=warnings, portals=portals, views=views,
-                 find_openings=find_openings)
+                 find_openings=find_openings, luminaires=luminaires)
 
 
 def _opening_faces(triangles: Triangles, materials: list[Material], portals: np.ndarray, where: str):

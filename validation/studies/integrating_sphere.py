@@ -52,11 +52,12 @@ iteration of the radiosity equation on Gauss–Legendre points (independent of t
 engine); for uniform exitance f = A_e / A_w.  The mean over the walls is taken from
 the engine's sensors on 6 × 6 Gauss–Legendre points per wall.
 
-**Noise.**  The direct step samples the emitter's facets uniformly by area (direct.py);
-one sample is zero on the hidden part, (1 + r/D)/2 of the sphere seen from distance D,
-and ∝ cos θ_l on the rest, so its relative standard deviation σ_1 ≈ 1.46 at D = R
-(→ √(5/3) far away) is computed by sampling the true sphere.  Every hemisphere-ray hit
-uses one such sample, so σ_1 / √(records · samples) bounds the noise of a level's mean.
+**Noise.**  The direct step gives a light surface in full view its closed form
+(emitters.py: the true sphere, π L sin²α cos θ_c), and nothing stands between the wall
+and the emitter, so the direct light at the sensors and at every hemisphere-ray hit has
+no noise at all.  The records' noise is that of their hemisphere rays alone: about
+(r/R)² of them end on the emitter, which absorbs.  (Before, 16 shadow rays uniform over
+the emitter's area left σ_1 ≈ 1.46 per ray, 40 % at the worst sensor.)
 
 **Measured** (``run``): the mean over the wall sensors for a ladder of bounce counts
 per ρ; every diffuse level of the deepest run against V_k; rays and records per level
@@ -76,7 +77,6 @@ import numpy as np
 
 from lbl_illum import Integrator, Options
 from lbl_illum.scene import scene_from_dict, sphere_triangles
-from lbl_illum.engine import QUERY_LIGHT_SAMPLES
 from lbl_illum.options import BOUNCE_ACCURACY_CAP, BOUNCE_ACCURACY_FACTOR, MIN_DEEP_SAMPLES
 from lbl_illum.photometry import luminance
 
@@ -100,9 +100,10 @@ CONVERGED_RHO, CONVERGED_BOUNCES, CONVERGED_BOUND = 0.9, 46, 0.02
 PER_BOUNCE_BOUND = 0.04
 #: ambient = E_∞ at the bounce limit: sensor mean within 2 % of E_∞.
 AMBIENT_BOUND = 0.02
-#: Every level's mean record value within max(5 %, 4 σ) of V_k, σ = σ_1 / √(records · samples)
-#: the direct step's noise on the level's own hits (σ_1: one shadow ray, computed).
-LEVEL_BOUND_FLOOR, LEVEL_BOUND_SIGMAS = 0.05, 4.0
+#: Every level's mean record value within 5 % of V_k (the direct light at its hits is exact).
+LEVEL_BOUND = 0.05
+#: Direct step at every sensor within this of π L (r/d)², d the sensor's distance from the centre.
+DIRECT_BOUND = 1e-6
 #: Closed box ρ = 0.999, 50 bounces, pure Monte Carlo: wall mean within 2 % of the flux balance.
 BOX_MC_BOUND = 0.02
 #: Gauss–Legendre points per side of each box wall (6 × 6: the direct illuminance's
@@ -233,25 +234,6 @@ def polygon_illuminance(points, normals, triangles, L):
     return out
 
 
-def single_sample_spread(distance: float, samples: int = 400_000, seed: int = 7) -> float:
-    """Relative standard deviation of one area sample of the direct step's estimate
-    (direct.py: E = L cos θ_r cos θ_l A / d², a point uniform on the emitter, zero if
-    the emitter hides it) for a sphere of radius r seen from ``distance`` along the
-    receiver's normal.  Computed by sampling the true sphere, without the engine."""
-    rng = np.random.default_rng(seed)
-    u = rng.normal(size=(samples, 3))
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    x = LAMP_RADIUS * u
-    receiver = np.array([0.0, 0.0, distance])
-    w = receiver - x
-    d = np.linalg.norm(w, axis=1)
-    w /= d[:, None]
-    cos_l = np.einsum("ij,ij->i", u, w)            # > 0: the point faces the receiver (visible)
-    cos_r = w[:, 2]
-    value = np.where(cos_l > 0.0, cos_r * cos_l / d ** 2, 0.0)
-    return float(value.std() / value.mean())
-
-
 def partial_sum(E0: float, q: float, N: int) -> float:
     """E(N) = E_0 Σ_{k=0..N} q^k."""
     return E0 * (1.0 - q ** (N + 1)) / (1.0 - q)
@@ -313,11 +295,10 @@ def run_engine(scene, points, normals, options):
     return integ, result
 
 
-def level_profile(integ, options, E0, q, sigma1):
+def level_profile(integ, options, E0, q):
     """Per level k of a sphere run with N bounces: records, a_k, S_k, hemisphere rays,
     the mean record value against V_k = E_0 Σ_{j=1..N−k} q^j, the correlation between
-    the records' R_i and values, and the bound
-    max(5 %, 4 σ_1/√(records · S_k)) (σ_1: one shadow ray's relative spread)."""
+    the records' R_i and values, and the bound :data:`LEVEL_BOUND`."""
     N = options.bounces
     rows = []
     for k, lv in enumerate(integ.cache.levels):
@@ -331,8 +312,7 @@ def level_profile(integ, options, E0, q, sigma1):
         rows.append({"level": k, "remaining": N - k, "records": int(lv.count), "accuracy": lv.accuracy,
                      "samples": options.level_samples(k), "hemisphere_rays": int(lv.count) * options.level_samples(k),
                      "mean": mean, "exact": exact, "error": mean / exact - 1.0, "corr_R_E": corr,
-                     "bound": max(LEVEL_BOUND_FLOOR, LEVEL_BOUND_SIGMAS * sigma1
-                                  / np.sqrt(lv.count * options.level_samples(k)))})
+                     "bound": LEVEL_BOUND})
     return rows
 
 
@@ -375,7 +355,6 @@ def run(ctx: StudyContext) -> Report:
                                                                                  lamp[:, 2] - lamp[:, 0]), axis=1).sum()
                                             / (4.0 * np.pi * LAMP_RADIUS ** 2))}
     base = Options(accuracy=plan.accuracy, samples=plan.samples, bounces=0)
-    sigma1 = single_sample_spread(WALL_RADIUS)
 
     # -- bounce ladders per ρ ----------------------------------------------------------
     ladder_rows, final_rows, profiles, kept = [], [], {}, {}
@@ -392,18 +371,16 @@ def run(ctx: StudyContext) -> Report:
             if "direct" not in res:
                 # the direct step at the sensors (its random stream is the same in every run)
                 direct = luminance(r.direct)
+                exact = np.pi * LAMP_LUMINANCE * LAMP_RADIUS ** 2 / np.sum(points ** 2, axis=1)
                 res["direct"] = {"mean_lux": float(direct.mean()), "error_of_mean": float(direct.mean() / E0 - 1.0),
-                                 "sensor_spread": float(direct.std() / E0), "single_sample_spread": sigma1,
-                                 "shadow_rays": QUERY_LIGHT_SAMPLES,
-                                 "hidden_fraction": 0.5 * (1.0 + LAMP_RADIUS / WALL_RADIUS),
-                                 "expected_sensor_spread": sigma1 / np.sqrt(QUERY_LIGHT_SAMPLES),
-                                 "expected_error_of_mean": sigma1 / np.sqrt(QUERY_LIGHT_SAMPLES * plan.sensors),
+                                 "sensor_spread": float(direct.std() / E0),
+                                 "max_sensor_error": float(np.abs(direct / exact - 1.0).max()),
                                  "finite": bool(np.isfinite(direct).all())}
             item = {"bounces": N, "mean": float(total.mean()), "indirect": float(ind.mean()),
                     "rays": int(r.stats.rays), "seconds": r.stats.seconds,
                     "records": int(sum(r.stats.new_records)), "finite": bool(np.isfinite(total).all())}
             runs.append(item)
-            kept[(rho, N)] = (item, level_profile(integ, opt, E0, q, sigma1))
+            kept[(rho, N)] = (item, level_profile(integ, opt, E0, q))
             if N == max(counts):
                 profiles[rho] = kept[(rho, N)][1]
             del integ
@@ -494,7 +471,7 @@ def run(ctx: StudyContext) -> Report:
             "mean": mean, "exact": exact, "error": mean / exact - 1.0,
             "indirect_error": float(luminance(r.indirect).mean()) / (exact - E0) - 1.0,
             "rays": int(r.stats.rays), "seconds": r.stats.seconds,
-            "records": int(sum(r.stats.new_records)), "profile": level_profile(integ, opt, E0, q, sigma1)}
+            "records": int(sum(r.stats.new_records)), "profile": level_profile(integ, opt, E0, q)}
         del integ
         res["scaling_setup"] = {"rho": rho, "bounces": N}
     scenes.clear()
@@ -585,17 +562,12 @@ to {fmt(em['facet_spread'], 2)}.  The reference values below use the facets' E_0
     d = res["direct"]
     rep.heading("Direct light at the sensors")
     rep.text(f"""
-With 0 bounces the result is the direct step alone ({d['shadow_rays']} shadow rays per sensor, points
-drawn uniformly over the emitter's facets).  Mean over the {plan.sensors} sensors: {fmt(d['mean_lux'])} lx,
-{pct(d['error_of_mean'])} from E_0.  One area sample of a sphere is a noisy estimate: the part of the
-sphere the sensor cannot see ({pct(d['hidden_fraction'], 0)} of its area, (1 + r/R)/2) gives zero, and the visible part a value
-proportional to the cosine at the emitter.  Its relative standard deviation, computed by sampling the
-true sphere without the engine, is σ_1 = {fmt(d['single_sample_spread'])}, so {d['shadow_rays']} rays give
-σ_1/√{d['shadow_rays']} = {pct(d['expected_sensor_spread'], 1)} per sensor (measured spread between sensors:
-{pct(d['sensor_spread'], 1)}) and {pct(d['expected_error_of_mean'])} for the mean over the sensors.  The
-direct step uses one such ray at every hemisphere-ray hit, so σ_1 also sets the noise of every record;
-it is the largest source of noise in this study.  The errors below are therefore given for the mean
-over the sensors, and for the interreflected (indirect) part separately.
+With 0 bounces the result is the direct step alone: the emitter is in full view of every sensor, so
+it is the closed form of the true sphere, π L (r/d)² (emitters.py), with no shadow ray's noise.  Worst
+sensor against it: {fmt(d['max_sensor_error'], 2)}; mean over the {plan.sensors} sensors {fmt(d['mean_lux'])} lx,
+{pct(d['error_of_mean'])} from the facets' E_0 (the facets lie inside the sphere by 7e-5 of its radius).
+The direct light at every hemisphere-ray hit is exact in the same way, so the records' noise is that of
+their hemisphere rays alone.
 """)
 
     rep.heading("Convergence with the number of bounces")
@@ -840,6 +812,7 @@ def checks(res: dict) -> list[dict]:
     def add(name, value, bound):
         out.append({"check": name, "value": float(value), "bound": float(bound), "held": bool(value <= bound)})
 
+    add("direct step, worst sensor: |E / (π L (r/d)²) − 1|", res["direct"]["max_sensor_error"], DIRECT_BOUND)
     runs = {x["bounces"]: x for x in res["ladders"].get(f"{CONVERGED_RHO:g}", {}).get("runs", [])}
     if CONVERGED_BOUNCES in runs:
         add(f"ρ = {CONVERGED_RHO:g}, {CONVERGED_BOUNCES} bounces: |mean / E_∞ − 1|",
@@ -879,8 +852,8 @@ def _findings(rep, plan, ctx):
     rhos = ", ".join(res["ladders"])
     items.append(f"Integrating sphere, deepest run for each ρ in {{{rhos}}}: the interreflected part is within "
                  f"{pct(worst_ind)} of the exact E(N) − E_0, and the total within {pct(worst)} of E(N).  The total "
-                 f"includes the direct step, the same in every run: {pct(res['direct']['error_of_mean'])} from E_0 "
-                 f"over these sensors (standard error of that mean ± {pct(res['direct']['expected_error_of_mean'])}), "
+                 f"includes the direct step, the same in every run: {pct(res['direct']['error_of_mean'])} from the "
+                 f"facets' E_0 over these sensors (the closed form of the true sphere), "
                  f"weighing E_0/E(N) in the total.  Against E_∞ the deepest runs are within {pct(worst_inf)}.")
     conv = ", ".join(f"ρ = {rho}: {item['bounces_for_1_percent']}" for rho, item in res["ladders"].items())
     items.append(f"Where it converges: the computed means follow the truncation q^(N+1) (figure 1), so the "
@@ -922,10 +895,9 @@ def _findings(rep, plan, ctx):
                      f"{pct(bias['groups'][2]['mean_error'])} in pure Monte Carlo: about "
                      f"{fmt(bias['per_bounce'], 2)} per bounce, multiplied by the mean bounce order "
                      f"({fmt(bias['amplification'])}).")
-    items.append(f"Noise: one shadow ray on the spherical emitter has a relative spread σ_1 = "
-                 f"{fmt(res['direct']['single_sample_spread'])}; at 16 rays per sensor the direct illuminance "
-                 f"varies by {pct(res['direct']['sensor_spread'], 0)} between sensors, and the single ray at each "
-                 f"hemisphere-ray hit makes it the main noise of every record.")
+    items.append(f"Noise: the direct light is the emitter's closed form at every sensor (worst "
+                 f"{fmt(res['direct']['max_sensor_error'], 2)} from π L (r/d)²) and at every hemisphere-ray hit; "
+                 f"what noise is left is the hemisphere rays'.")
     box_runs = res["box"]["runs"]
     for label in dict.fromkeys(x["label"] for x in box_runs):
         items_l = [x for x in box_runs if x["label"] == label]
@@ -937,9 +909,7 @@ def _findings(rep, plan, ctx):
     rep.heading("Bounds asserted by the test suite", 3)
     rep.text(f"""
 `tests/studies/test_integrating_sphere.py` runs the quick version and asserts these bounds.  The level
-bound_k is max({pct(LEVEL_BOUND_FLOOR, 0)}, {LEVEL_BOUND_SIGMAS:g} σ_1/√(records_k · samples_k)): the
-deepest levels hold few hits per record, and σ_1 = {fmt(res['direct']['single_sample_spread'])} is the
-spread of their single shadow ray.
+bound_k is {pct(LEVEL_BOUND, 0)}: the deepest levels hold few records, each of few hemisphere rays.
 """)
     rep.table(["check", "measured", "bound", "held"],
               [[c["check"], fmt(c["value"], 3), fmt(c["bound"], 3), c["held"]] for c in res["checks"]])
@@ -953,8 +923,7 @@ spread of their single shadow ray.
         rep.heading("What bounds the error", 3)
         rep.text(f"""
 In the sphere the light is the same at every wall point, so interpolation cannot go wrong by the shape
-of the light; the errors there are the noise of the direct step's single shadow ray per hit (σ_1 above),
-the truncation q^(N+1), and at ρ = 0.99 the small bias of the record radius (previous section).  The
+of the light; the errors there are the noise of the hemisphere rays, the truncation q^(N+1), and at ρ = 0.99 the small bias of the record radius (previous section).  The
 accuracy growth of §3.4 (a up to twice the first level's) has no shape of the light to miss there: with
 bounce scaling on and off the interreflected part is off by {on_ind} and {off_ind}.
 
