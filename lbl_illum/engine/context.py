@@ -54,6 +54,9 @@ class LightingContext:
     diffuse_reflector : (materials,) reflects diffusely (ends a path at a diffuse level:
         a diffuse surface or the diffuse part of plastic)
     rho_over_pi : (materials, 3) ρ_d/π [1/sr]
+    diffuse_transmitter : (materials,) transmits diffusely (``translucent``: a path that
+        meets it also ends on its far side)
+    tau_over_pi : (materials, 3) τ_d/π [1/sr]
     reflects : some surface of the scene reflects specularly (a mirror, glass with
         reflectance, plastic with a specular part)
     plastic : some plastic is in the scene (its specular branches play Russian roulette)
@@ -71,6 +74,8 @@ class LightingContext:
     portal_index: np.ndarray
     diffuse_reflector: np.ndarray
     rho_over_pi: np.ndarray
+    diffuse_transmitter: np.ndarray
+    tau_over_pi: np.ndarray
     reflects: bool
     plastic: bool
     sun_glossy: bool
@@ -102,6 +107,8 @@ class LightingContext:
                    openings=openings_tracer, opening_first=len(glass_ids), portal_index=_frozen(portal_index),
                    diffuse_reflector=_frozen(materials.diffuse_reflectance.max(axis=1) > 0.0),
                    rho_over_pi=_frozen(materials.diffuse_reflectance / np.pi),
+                   diffuse_transmitter=_frozen(materials.diffuse_transmittance.max(axis=1) > 0.0),
+                   tau_over_pi=_frozen(materials.diffuse_transmittance / np.pi),
                    reflects=bool(specular.any()),
                    plastic=bool(np.any(materials.kind[used] == PLASTIC)),
                    sun_glossy=direct.sun is not None and bool(np.any(materials.glossy[used])),

@@ -15,7 +15,11 @@ hit an emitter            a ``light`` surface's luminance — for images always,
                           through glass was counted by the direct step (§5)
 diffuse hit               a hit (P, normals, weight = throughput · ρ_d/π) whose luminance
                           is weight · E(P) once the level below is known (plastic's
-                          diffuse part too; a plastic hit is also a specular event)
+                          diffuse part too; a plastic hit is also a specular event);
+                          on a ``translucent`` surface a second hit on its far side
+                          (normals reversed, weight = throughput · τ_d/π): the paper's
+                          diffuse transmission, the far side's irradiance from its own
+                          records
 specular event            mirrors reflect; rough plastic draws a direction from its lobe
                           and its sun highlight is taken by a shadow ray; glass reflects
                           *or* transmits (hemisphere rays: chosen at random in
@@ -206,6 +210,16 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             if context.plastic_fresnel:           # polished plastic: ρ_d(θ) = (1 − ρ_s(θ)) C
                 weight = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif])) / np.pi
             out["weight"].append(weight if unit else through[hit[dif]] * weight)
+        # -- diffuse transmission: the far side's irradiance, seen through the surface
+        #    (translucent: L = ρ E_near/π + τ E_far/π; the far side's own records hold E_far)
+        back = np.flatnonzero(context.diffuse_transmitter[mat])
+        if len(back):
+            out["ray"].append(ray[hit[back]])
+            out["P"].append(P[back])
+            out["Ns"].append(-Ns[back])
+            out["Ng"].append(-Ng[back])
+            weight = context.tau_over_pi[mat[back]]
+            out["weight"].append(weight if unit else through[hit[back]] * weight)
         # -- emitters
         is_light = kind == LIGHT
         lit = np.flatnonzero(is_light if policy.emitters_always else is_light & reflected[hit])

@@ -252,7 +252,11 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
     * ``mirror`` → ``mirror`` with the reflectance RGB;
     * ``plastic`` → ``plastic`` with the colour RGB, the specularity and the roughness
       (the same model: :mod:`lbl_illum.scene.materials`);
-    * ``light`` → ``light`` with radiance = luminance / 179 per channel.
+    * ``light`` → ``light`` with radiance = luminance / 179 per channel;
+    * ``translucent`` (ρ, τ) → ``trans`` with colour C = ρ + τ, no specular part and
+      transmitted share τ/(ρ + τ) (Radiance's trans reflects C (1 − t_d) and transmits
+      C t_d diffusely), or, when that share differs between channels, a ``BRTDfunc``
+      with diffuse reflectance ρ on both faces and diffuse transmittance τ.
     """
     if material.kind == "diffuse":
         return f"void plastic {rad_name}\n0\n0\n5 {_rgb(material.reflectance)} 0 0\n"
@@ -261,6 +265,15 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
                 f"{_g(material.roughness)}\n")
     if material.kind == "mirror":
         return f"void mirror {rad_name}\n0\n0\n3 {_rgb(material.reflectance)}\n"
+    if material.kind == "translucent":
+        rho, tau = np.array(material.reflectance), np.array(material.transmittance)
+        C = rho + tau
+        share = (tau / np.where(C > 0, C, 1.0))[C > 0]
+        if len(share) == 0 or np.ptp(share) <= 1e-9:
+            t_d = float(share[0]) if len(share) else 0.0
+            return f"void trans {rad_name}\n0\n0\n7 {_rgb(C)} 0 0 {_g(t_d)} 0\n"
+        return (f"void BRTDfunc {rad_name}\n10 0 0 0 0 0 0 0 0 0 .\n0\n"
+                f"9 {_rgb(rho)} {_rgb(rho)} {_rgb(tau)}\n")
     if material.kind == "light":
         return f"void light {rad_name}\n0\n0\n3 {_rgb(to_radiance(material.luminance))}\n"
     if material.kind == "glass":

@@ -10,7 +10,8 @@ from .._public import public_surface
 __all__, __getattr__, __dir__ = public_surface(globals(), {
     "scenefile": ("Scene", "load_scene", "scene_from_dict"),
     "geometry": ("Triangles", "box_triangles", "polygon_triangles", "rectangle_triangles", "sphere_triangles"),
-    "materials": ("Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING"),
+    "materials": ("Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING",
+                  "TRANSLUCENT"),
     "views": ("View", "view_from_file", "view_from_string"),
     "units": ("metres_per_unit",),
     "luminaires": ("Luminaire",),

@@ -13,6 +13,9 @@ mirror     specular reflector                                           ``reflec
 plastic    Radiance's ``plastic``: a white specular part (Ward's          ``reflectance`` C (0…1),
            isotropic lobe, or a mirror when polished) over a Lambertian  ``specularity`` s (0…1),
            part of colour C                                             ``roughness`` α (0…1)
+translucent  Lambertian reflector and diffuse transmitter: radiance       ``reflectance`` ρ (0…1),
+           L = ρ E_this side / π + τ E_other side / π (both faces)      ``transmittance`` τ (0…1),
+                                                                        ρ + τ ≤ 1
 light      Lambertian emitter, counted by the direct calculation only  ``luminance`` [cd/m²]
 opening    an unglazed opening: no ray sees the surface; the indirect  (none)
            calculation samples its area like a window portal
@@ -87,15 +90,16 @@ from ..errors import InputError, check_keys, get_number, get_rgb, show
 from .geometry import orthonormal_basis
 from ..photometry import luminance
 
-__all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING", "GLASS_INDEX",
+__all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "PLASTIC", "OPENING", "TRANSLUCENT",
+           "GLASS_INDEX",
            "GLAZING_MODELS", "DEFAULT_GLASS_PORTAL", "material_from_table", "thin_pane_reflectance",
            "fresnel_interfaces", "glazing_optics", "pane_transmissivity", "max_transmittance", "plastic_fresnel",
            "ward_brdf", "ward_pdf", "ward_sample", "russian_roulette", "POLISHED_ROUGHNESS2", "FRESNEL_THRESHOLD",
            "PLASTIC_BRANCH_LIMIT"]
 
-DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC, OPENING = 0, 1, 2, 3, 4, 5
+DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC, OPENING, TRANSLUCENT = 0, 1, 2, 3, 4, 5, 6
 KIND_CODES = {"diffuse": DIFFUSE, "glass": GLASS, "mirror": MIRROR, "light": LIGHT, "plastic": PLASTIC,
-              "opening": OPENING}
+              "opening": OPENING, "translucent": TRANSLUCENT}
 _KEYS = {
     "diffuse": ("type", "reflectance"),
     "glass": ("type", "transmittance", "reflectance", "portal", "model", "panes", "refractive_index"),
@@ -103,6 +107,7 @@ _KEYS = {
     "plastic": ("type", "reflectance", "specularity", "roughness"),
     "light": ("type", "luminance"),
     "opening": ("type",),
+    "translucent": ("type", "reflectance", "transmittance"),
 }
 #: Refractive index of window glass (soda-lime float glass in the visible; Radiance's RINDEX).
 GLASS_INDEX = 1.52
@@ -144,9 +149,9 @@ class Material:
     """
 
     name: str
-    kind: str                                   # "diffuse" | "glass" | "mirror" | "plastic" | "light" | "opening"
+    kind: str                                   # "diffuse" | "glass" | "mirror" | "plastic" | "light" | "opening" | "translucent"
     reflectance: tuple = (0.0, 0.0, 0.0)        # ρ (diffuse, mirror, glass surface reflection), C (plastic)
-    transmittance: tuple = (0.0, 0.0, 0.0)      # τ_n (glass, normal incidence)
+    transmittance: tuple = (0.0, 0.0, 0.0)      # τ_n (glass, normal incidence); τ_d (translucent)
     luminance: tuple = (0.0, 0.0, 0.0)          # emitted luminance [cd/m²] (light)
     portal: bool | str = False                  # glass sampled by area in the indirect step: True, False, "auto"
     model: str = "fresnel"                      # glass: "fresnel" | "constant"
@@ -441,6 +446,12 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
         return Material(name, kind, luminance=get_rgb(table, "luminance", where))
     if kind == "opening":
         return Material(name, kind)
+    if kind == "translucent":
+        rho = get_rgb(table, "reflectance", where, maximum=1.0)
+        tau = get_rgb(table, "transmittance", where, maximum=1.0)
+        if any(r + t > 1.0 + 1e-12 for r, t in zip(rho, tau)):
+            raise InputError(f"{where}: reflectance + transmittance must not exceed 1")
+        return Material(name, kind, reflectance=rho, transmittance=tau)
     if kind == "plastic":
         return Material(name, kind, reflectance=get_rgb(table, "reflectance", where, maximum=1.0),
                         specularity=get_number(table, "specularity", where, minimum=0.0, maximum=1.0),
@@ -496,7 +507,7 @@ def _glass_from_table(name: str, table: Mapping[str, Any], where: str) -> Materi
 class MaterialTable:
     """The materials as arrays indexed by material id, for vectorised shading."""
 
-    kind: np.ndarray            # (m,) int8, one of DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC
+    kind: np.ndarray            # (m,) int8, one of DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC, OPENING, TRANSLUCENT
     reflectance: np.ndarray     # (m, 3) float64 (glass: normal incidence; plastic: its colour C)
     transmittance: np.ndarray   # (m, 3) float64 (glass: normal incidence)
     luminance: np.ndarray       # (m, 3) float64 [cd/m²]
@@ -518,7 +529,10 @@ class MaterialTable:
         plastic = self.kind == PLASTIC
         #: (m, 3) Lambertian reflectance: ρ of diffuse materials, (1 − s) C of plastic
         #: (a polished plastic's at angle θ is :meth:`diffuse_at`), 0 for other kinds
-        self.diffuse_reflectance = np.where((self.kind == DIFFUSE)[:, None], self.reflectance, 0.0)
+        self.diffuse_reflectance = np.where(((self.kind == DIFFUSE) | (self.kind == TRANSLUCENT))[:, None],
+                                            self.reflectance, 0.0)
+        #: (m, 3) diffuse transmittance: τ of translucent materials, 0 for other kinds
+        self.diffuse_transmittance = np.where((self.kind == TRANSLUCENT)[:, None], self.transmittance, 0.0)
         self.diffuse_reflectance[plastic] = (1.0 - self.specularity[plastic, None]) * self.reflectance[plastic]
         polished = self.roughness ** 2 <= POLISHED_ROUGHNESS2
         #: (m,) bool, plastic with a specular lobe (roughness α² > 1e-6 and s > 0)

@@ -309,8 +309,10 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
     ``plastic`` (C, s, α): diffuse C when s = 0, else our plastic; ``metal``: our plastic
     with the same arguments (its specular part white instead of coloured by C: the
     difference is counted in a warning); ``glass`` (t_n per channel, n): Fresnel glass of
-    the same normal transmittance; ``mirror``: mirror; ``trans``: diffuse with the
-    reflected part (1 − s)(1 − t_d) C (no transmission yet: warned); ``light``, ``glow``:
+    the same normal transmittance; ``mirror``: mirror; ``trans`` (C, s, α, t_d, t_s):
+    translucent, diffuse reflectance (1 − s)(1 − t_d) C and diffuse transmittance
+    (1 − s) t_d C (a specular part of either is warned: its reflection is dropped, its
+    transmission made diffuse); ``light``, ``glow``:
     light surfaces of luminance 179 × radiance.  A pattern that modifies a material is
     left out (warned).  ``alias`` is followed.  A modifier that is not defined, or whose
     type is not converted, is an :class:`InputError` naming it.
@@ -343,9 +345,14 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
         elif prim.kind == "mirror":
             out[name] = {"type": "mirror", "reflectance": rgb}
         elif prim.kind == "trans":
-            s, td = float(a[3]), float(a[5])
-            notes["trans read as diffuse (no transmission)"] = notes.get("trans read as diffuse (no transmission)", 0) + 1
-            out[name] = {"type": "diffuse", "reflectance": [c * (1.0 - s) * (1.0 - td) for c in rgb]}
+            # Radiance's trans: diffuse reflectance C (1 − s)(1 − t_d), transmitted C (1 − s) t_d,
+            # of which t_s specularly; both transmitted parts become diffuse transmission
+            s, td, ts = float(a[3]), float(a[5]), float(a[6])
+            if s > 0.0 or ts > 0.0:
+                what = "trans read as translucent (its specular reflection dropped, its specular transmission diffuse)"
+                notes[what] = notes.get(what, 0) + 1
+            out[name] = {"type": "translucent", "reflectance": [c * (1.0 - s) * (1.0 - td) for c in rgb],
+                         "transmittance": [c * (1.0 - s) * td for c in rgb]}
         else:                       # light, glow
             out[name] = {"type": "light", "luminance": [WHITE_EFFICACY * c for c in rgb]}
     if warnings is not None and notes:

@@ -204,3 +204,19 @@ def test_other_primitives_are_counted_in_one_warning(tmp_path):
     read_rad_surfaces(path, "room.rad", 1.0, warnings)
     assert warnings == ["room.rad: skipped 1 'mesh', 1 'instance' primitives (read: polygon, sphere, bubble, "
                         "cylinder, tube, cone, cup, ring)"]
+
+
+@pytest.mark.parametrize("spec,warned", [(0.0, False), (0.04, True)])
+def test_trans_becomes_translucent(tmp_path, spec, warned):
+    """Radiance's trans (C, s, α, t_d, t_s): diffuse reflectance C (1 − s)(1 − t_d) and
+    diffuse transmittance C (1 − s) t_d; a specular part is warned."""
+    _write(tmp_path, "shade.rad", f"void trans fabric\n0\n0\n7 0.8 0.6 0.4 {spec} 0 0.25 0\n\n"
+                                  "fabric polygon shade\n0\n0\n12 0 0 1  1 0 1  1 1 1  0 1 1\n")
+    _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "shade.rad"\n[sky]\ntype = "uniform"\n'
+                                   'horizontal_illuminance = 1000\n')
+    scene = load_scene(tmp_path / "scene.toml")
+    (m,) = scene.materials
+    C = np.array([0.8, 0.6, 0.4]) * (1 - spec)
+    assert m.kind == "translucent"
+    assert np.allclose(m.reflectance, C * 0.75) and np.allclose(m.transmittance, C * 0.25)
+    assert any("trans read as translucent" in w for w in scene.warnings) == warned
