@@ -286,6 +286,7 @@ studies:
   sky-component       sky component through roof and façade openings against an independent integral, 16 skies
   office-daylight     office DF against Radiance rtrace (overcast; clear sky with sun) and gensky's horizon blend
   corpus              every preset on daylit interiors modelled by others, whole commands against references
+  electric            CIE 171 point, area, flux and interreflection cases, a translucent skylight, IES downlights
 """
 
 

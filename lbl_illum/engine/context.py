@@ -51,6 +51,8 @@ class LightingContext:
         the openings it crosses
     opening_first : portal index of the first opening triangle (the glass ones come first)
     portal_index : (T,) per scene triangle, its portal index (-1: not a portal)
+    translucent_portal : (T,) per scene triangle, a translucent sheet sampled as a portal
+        (a ray that meets it ends there on both faces: :mod:`lbl_illum.engine.portal_sampling`)
     diffuse_reflector : (materials,) reflects diffusely (ends a path at a diffuse level:
         a diffuse surface or the diffuse part of plastic)
     rho_over_pi : (materials, 3) ρ_d/π [1/sr]
@@ -72,6 +74,7 @@ class LightingContext:
     openings: Tracer | None
     opening_first: int
     portal_index: np.ndarray
+    translucent_portal: np.ndarray
     diffuse_reflector: np.ndarray
     rho_over_pi: np.ndarray
     diffuse_transmitter: np.ndarray
@@ -100,14 +103,17 @@ class LightingContext:
             openings_tracer = Tracer(Triangles(opening_tris, np.zeros(len(opening_tris), np.int32),
                                                np.full(len(opening_tris), -1, np.int32)),
                                      np.zeros(1, np.int8), np.zeros((1, 3)), threads=tracer.threads)
+        diffuse_transmitter = materials.diffuse_transmittance.max(axis=1) > 0.0
+        translucent_portal = (portal_index >= 0) & diffuse_transmitter[scene.triangles.material]
         used = np.unique(scene.triangles.material)
         specular = np.isin(materials.kind[used], (MIRROR, GLASS)) & (materials.reflectance[used].max(axis=1) > 0)
         specular |= materials.specularity[used] > 0.0
         return cls(scene=scene, materials=materials, tracer=tracer, direct=direct, portal_set=portal_set,
                    openings=openings_tracer, opening_first=len(glass_ids), portal_index=_frozen(portal_index),
+                   translucent_portal=_frozen(translucent_portal),
                    diffuse_reflector=_frozen(materials.diffuse_reflectance.max(axis=1) > 0.0),
                    rho_over_pi=_frozen(materials.diffuse_reflectance / np.pi),
-                   diffuse_transmitter=_frozen(materials.diffuse_transmittance.max(axis=1) > 0.0),
+                   diffuse_transmitter=_frozen(diffuse_transmitter),
                    tau_over_pi=_frozen(materials.diffuse_transmittance / np.pi),
                    reflects=bool(specular.any()),
                    plastic=bool(np.any(materials.kind[used] == PLASTIC)),
@@ -160,7 +166,8 @@ class LightingContext:
         """Per portal triangle, the luminance [cd/m²] seen through it from the centre of
         the box ``roi = (lo, hi)`` [m] around a run's query points: the sky (or ground
         glow) in the direction of the triangle's centroid, times the glass's
-        transmittance at that incidence (1 for an opening)."""
+        transmittance at that incidence (1 for an opening; a translucent sheet's diffuse
+        τ, its far face's luminance τ E/π under a uniform sky of luminance E/π)."""
         centre = 0.5 * (roi[0] + roi[1])
         d = self.portals.vertices.mean(axis=1) - centre
         d /= np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
@@ -170,7 +177,10 @@ class LightingContext:
         if glass.any():
             p = prim[glass]
             cos = np.abs(np.einsum("ij,ij->i", self.tracer.normals[p], d[glass]))
-            tau = self.materials.glass_transmittance(self.scene.triangles.material[p], cos)
+            mat = self.scene.triangles.material[p]
+            tau = self.materials.glass_transmittance(mat, cos)
+            diffuse = self.diffuse_transmitter[mat]
+            tau[diffuse] = self.materials.diffuse_transmittance[mat[diffuse]]
             L[glass] *= luminance(tau)
         return L
 

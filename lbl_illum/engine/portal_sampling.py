@@ -36,11 +36,16 @@ from .context import LightingContext
 from .paths import HEMISPHERE, MAX_SPECULAR_DEPTH, follow_paths
 from .raycast import Hits, step_past
 
-__all__ = ["PORTAL_SAMPLE_FRACTION", "portal_sample_plan", "portal_density", "hemisphere_weight",
+__all__ = ["PORTAL_SAMPLE_FRACTION", "TRANSLUCENT_SOLID_ANGLE", "portal_sample_plan", "solid_angle", "portal_density", "hemisphere_weight",
            "PortalBalanceWeights", "trace_hemisphere_rays", "portal_samples"]
 
 #: Portal samples per primary evaluation, as a fraction of its hemisphere samples.
 PORTAL_SAMPLE_FRACTION = 0.5
+#: [sr] Points that see the translucent portals under more than this solid angle do not
+#: sample the portals: the cosine-distributed hemisphere finds a sheet that fills a
+#: quarter of the sphere, while area samples spread over a vast sheet (a luminous
+#: ceiling) send the levels below to every part of it.
+TRANSLUCENT_SOLID_ANGLE = np.pi
 
 
 def portal_sample_plan(context: LightingContext, P, S: int) -> tuple[np.ndarray | None, int]:
@@ -48,19 +53,45 @@ def portal_sample_plan(context: LightingContext, P, S: int) -> tuple[np.ndarray 
     rays sample the portals, and how many portal samples each draws.
 
     Only points behind at least half of the portals' area sample them
-    (:meth:`~lbl_illum.engine.portals.PortalSet.inside`); each draws the stratified grid
-    of the portal sampler nearest :data:`PORTAL_SAMPLE_FRACTION` · S points.  Returns
-    ``(inside, n_p)``: the indices of those points (None without portals) and n_p (0 when
-    none samples them).
+    (:meth:`~lbl_illum.engine.portals.PortalSet.inside`), and of those only the ones that
+    see the translucent portals under at most :data:`TRANSLUCENT_SOLID_ANGLE`; each draws
+    the stratified grid of the portal sampler nearest :data:`PORTAL_SAMPLE_FRACTION` · S
+    points.  Both rules depend on position alone, so every estimate stays unbiased.
+    Returns ``(inside, n_p)``: the indices of those points (None without portals) and n_p
+    (0 when none samples them).
     """
     if context.portals is None:
         return None, 0
     inside = np.flatnonzero(context.portal_set.inside(P))
+    sheets = context.translucent_portal[context.portal_prim[context.portal_prim >= 0]]
+    if len(inside) and sheets.any():
+        glass_count = int(np.count_nonzero(context.portal_prim >= 0))
+        triangles = context.portals.vertices[:glass_count][sheets]
+        inside = inside[solid_angle(P[inside], triangles) <= TRANSLUCENT_SOLID_ANGLE]
     n_p = 0
     if len(inside):
         gx, gy = context.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))
         n_p = gx * gy
     return inside, n_p
+
+
+def solid_angle(points, triangles, block: int = 1 << 20) -> np.ndarray:
+    """(n,) solid angle [sr] that the (k, 3, 3) ``triangles`` subtend at ``points`` (n, 3)
+    [m], summed (overlaps counted twice): tan(Ω/2) = |a·(b×c)| / (abc + (a·b)c +
+    (a·c)b + (b·c)a) for each triangle, a, b, c its corners relative to the point
+    (Van Oosterom & Strackee, IEEE Trans. Biomed. Eng. 30, 1983)."""
+    points = np.asarray(points, np.float64)
+    out = np.zeros(len(points))
+    step = max(1, block // max(1, len(triangles)))
+    for lo in range(0, len(points), step):
+        rel = triangles[None] - points[lo:lo + step, None, None, :]           # (m, k, 3, 3)
+        a, b, c = rel[:, :, 0], rel[:, :, 1], rel[:, :, 2]
+        la, lb, lc = (np.linalg.norm(x, axis=-1) for x in (a, b, c))
+        triple = np.abs(np.einsum("mkc,mkc->mk", a, np.cross(b, c)))
+        dot = lambda x, y: np.einsum("mkc,mkc->mk", x, y)          # noqa: E731
+        den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la
+        out[lo:lo + step] = (2.0 * np.arctan2(triple, den)).sum(axis=1)
+    return out
 
 
 def portal_density(context: LightingContext, directions, t, prim=None, origins=None) -> np.ndarray:
@@ -145,7 +176,13 @@ class PortalBalanceWeights:
             ray, origins, directions = ray[keep], origins[keep], directions[keep]
             hits = Hits(hits.t[keep], hits.prim[keep])
         self.p_open = portal_density(self.context, directions, hits.t, origins=origins)
-        self.weight[ray] = hemisphere_weight(self.normals[ray], directions, self.p_open, self.S, self.n_p[ray])
+        density = self.p_open
+        sheet = np.flatnonzero(hits.hit)
+        sheet = sheet[self.context.translucent_portal[hits.prim[sheet]]]
+        if len(sheet):              # a translucent portal ends the ray on both its faces
+            density = density.copy()
+            density[sheet] += portal_density(self.context, directions[sheet], hits.t[sheet], prim=hits.prim[sheet])
+        self.weight[ray] = hemisphere_weight(self.normals[ray], directions, density, self.S, self.n_p[ray])
         return keep
 
     def through_portal(self, ray, directions, hits, rows):
@@ -236,7 +273,7 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
                           "weight": p_hits["weight"] * weight[p_hits["ray"], None]})
             owners.append(owner[use][p_hits["ray"]])
 
-    # portal glass: through the pane drawn on, if it is the first surface met
+    # portal glass and translucent sheets: the triangle drawn on must be the first surface met
     use = np.flatnonzero(usable & (target >= 0))
     if len(use):
         hits = tracer.intersect(o[use], w[use])
@@ -244,14 +281,24 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
         use = use[first]
         if len(use):
             sub = Hits(hits.t[first], hits.prim[first])
-            Pp, Ngp, _ = tracer.surface(o[use], w[use], sub, np.arange(len(use)))
-            cos_p = np.einsum("ij,ij->i", tracer.normals[sub.prim], w[use])
-            tau = context.materials.glass_transmittance(context.scene.triangles.material[sub.prim], cos_p)
             density = portal_density(context, w[use], sub.t, prim=sub.prim, origins=o[use])
             weight = hemisphere_weight(Ns[owner[use]], w[use], density, S, n_p)
-            _, radiance, p_hits, _ = trace_hemisphere_rays(context, tracer.offset(Pp, -Ngp), w[use], rng,
-                                                           through=tau)
-            add(use, radiance, p_hits, weight)
+            # a translucent sheet: the ray ends there, on the near face (ρ/π) and the far
+            # face (τ/π), as any ray that meets it does (paths.py)
+            sheet = context.translucent_portal[sub.prim]
+            if sheet.any():
+                _, radiance, p_hits, _ = trace_hemisphere_rays(context, o[use[sheet]], w[use[sheet]], rng)
+                add(use[sheet], radiance, p_hits, weight[sheet])
+            # glass: through the pane at τ(θ), on like any ray
+            pane = ~sheet
+            if pane.any():
+                use, weight, sub = use[pane], weight[pane], Hits(sub.t[pane], sub.prim[pane])
+                Pp, Ngp, _ = tracer.surface(o[use], w[use], sub, np.arange(len(use)))
+                cos_p = np.einsum("ij,ij->i", tracer.normals[sub.prim], w[use])
+                tau = context.materials.glass_transmittance(context.scene.triangles.material[sub.prim], cos_p)
+                _, radiance, p_hits, _ = trace_hemisphere_rays(context, tracer.offset(Pp, -Ngp), w[use], rng,
+                                                               through=tau)
+                add(use, radiance, p_hits, weight)
     # openings: unobstructed up to the point drawn, then on like any ray
     use = np.flatnonzero(usable & (target < 0))
     if len(use):

@@ -7,6 +7,8 @@ importance sampling over the portals of this module.  A portal is worth its samp
 where the sky lies behind it, and only for what lies in front of it:
 
 * **Candidates**: glass whose material says ``portal = "auto"`` (the default) or ``true``,
+  translucent sheets likewise (a diffusing skylight: its far face's light, τ E/π, is
+  what the portal samples find there),
   the ``[[portals]]`` polygons and ``opening`` faces of the scene file, and the unglazed
   openings :func:`lbl_illum.engine.openings.find_openings` finds in the geometry (unless the scene
   sets ``find_openings = false``).
@@ -36,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene.geometry import TriangleSampler, Triangles
-from ..scene.materials import GLASS
+from ..scene.materials import GLASS, TRANSLUCENT
 
 __all__ = ["PortalSet", "build_portals", "PROBE_RAYS", "MIN_SKY_FRACTION"]
 
@@ -190,11 +192,12 @@ def build_portals(scene, tracer, materials, find: bool = True, rng: np.random.Ge
     rng = rng or np.random.default_rng(0)
     tri = scene.triangles
     mat = tri.material
-    glass = materials.kind[mat] == GLASS
-    candidate = np.flatnonzero(glass & materials.portal[mat])
+    # glass and translucent sheets close an opening; those whose material allows it are candidates
+    glazing = (materials.kind[mat] == GLASS) | (materials.kind[mat] == TRANSLUCENT)
+    candidate = np.flatnonzero(glazing & materials.portal[mat])
     forced = materials.portal_forced[mat[candidate]]
     openings = np.asarray(scene.portals, np.float64).reshape(-1, 3, 3)
-    found = find_openings(tri.vertices, glass, tracer, rng) if find else []
+    found = find_openings(tri.vertices, glazing, tracer, rng) if find else []
     # an opening already drawn as a portal is not found again (two portals over one opening
     # would be sampled twice, while a ray crossing them counts one)
     found = [o for o in found if not _covered(o.centre, openings)]

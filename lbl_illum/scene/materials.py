@@ -15,7 +15,8 @@ plastic    Radiance's ``plastic``: a white specular part (Ward's          ``refl
            part of colour C                                             ``roughness`` α (0…1)
 translucent  Lambertian reflector and diffuse transmitter: radiance       ``reflectance`` ρ (0…1),
            L = ρ E_this side / π + τ E_other side / π (both faces)      ``transmittance`` τ (0…1),
-                                                                        ρ + τ ≤ 1
+                                                                        ρ + τ ≤ 1,
+                                                                        ``portal`` (auto/true/false)
 light      Lambertian emitter, counted by the direct calculation only  ``luminance`` [cd/m²]
 opening    an unglazed opening: no ray sees the surface; the indirect  (none)
            calculation samples its area like a window portal
@@ -107,7 +108,7 @@ _KEYS = {
     "plastic": ("type", "reflectance", "specularity", "roughness"),
     "light": ("type", "luminance"),
     "opening": ("type",),
-    "translucent": ("type", "reflectance", "transmittance"),
+    "translucent": ("type", "reflectance", "transmittance", "portal"),
 }
 #: Refractive index of window glass (soda-lime float glass in the visible; Radiance's RINDEX).
 GLASS_INDEX = 1.52
@@ -451,7 +452,7 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
         tau = get_rgb(table, "transmittance", where, maximum=1.0)
         if any(r + t > 1.0 + 1e-12 for r, t in zip(rho, tau)):
             raise InputError(f"{where}: reflectance + transmittance must not exceed 1")
-        return Material(name, kind, reflectance=rho, transmittance=tau)
+        return Material(name, kind, reflectance=rho, transmittance=tau, portal=_portal(table, where))
     if kind == "plastic":
         return Material(name, kind, reflectance=get_rgb(table, "reflectance", where, maximum=1.0),
                         specularity=get_number(table, "specularity", where, minimum=0.0, maximum=1.0),
@@ -459,11 +460,17 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
     return _glass_from_table(name, table, where)
 
 
-def _glass_from_table(name: str, table: Mapping[str, Any], where: str) -> Material:
-    tau = get_rgb(table, "transmittance", where, maximum=1.0)
+def _portal(table: Mapping[str, Any], where: str) -> bool | str:
+    """The ``portal`` key of glass and translucent materials (default ``"auto"``)."""
     portal = table.get("portal", DEFAULT_GLASS_PORTAL)
     if not (isinstance(portal, bool) or portal == "auto"):
         raise InputError(f"{where}: 'portal' must be true, false or \"auto\", got {show(portal)}")
+    return portal
+
+
+def _glass_from_table(name: str, table: Mapping[str, Any], where: str) -> Material:
+    tau = get_rgb(table, "transmittance", where, maximum=1.0)
+    portal = _portal(table, where)
     model = table.get("model", GLAZING_MODELS[0])
     if not isinstance(model, str) or model not in GLAZING_MODELS:
         raise InputError(f"{where}: 'model' must be one of {', '.join(repr(m) for m in GLAZING_MODELS)}, "
@@ -511,8 +518,8 @@ class MaterialTable:
     reflectance: np.ndarray     # (m, 3) float64 (glass: normal incidence; plastic: its colour C)
     transmittance: np.ndarray   # (m, 3) float64 (glass: normal incidence)
     luminance: np.ndarray       # (m, 3) float64 [cd/m²]
-    portal: np.ndarray          # (m,) bool, glass that may be sampled by area in the indirect step
-    portal_forced: np.ndarray = None    # (m,) bool, glass that is (portal = true, not "auto")
+    portal: np.ndarray          # (m,) bool, glass or translucent that may be sampled by area in the indirect step
+    portal_forced: np.ndarray = None    # (m,) bool, glass or translucent that is (portal = true, not "auto")
     fresnel: np.ndarray = None          # (m,) bool, angle-dependent (Fresnel) glass
     panes: np.ndarray = None            # (m,) int8, panes of Fresnel glass
     index: np.ndarray = None            # (m,) float64, refractive index of Fresnel glass
@@ -554,6 +561,7 @@ class MaterialTable:
     def from_materials(cls, materials: list[Material]) -> "MaterialTable":
         fresnel = np.array([m.fresnel for m in materials], dtype=bool)
         kinds = np.array([m.code for m in materials], dtype=np.int8)
+        portal_kind = (kinds == GLASS) | (kinds == TRANSLUCENT)      # what may be sampled as a portal
         tn = np.zeros((len(materials), 3))
         for i, m in enumerate(materials):
             if m.fresnel:
@@ -563,8 +571,8 @@ class MaterialTable:
             reflectance=np.array([m.reflectance for m in materials], dtype=np.float64).reshape(-1, 3),
             transmittance=np.array([m.transmittance for m in materials], dtype=np.float64).reshape(-1, 3),
             luminance=np.array([m.luminance for m in materials], dtype=np.float64).reshape(-1, 3),
-            portal=np.array([m.portal is not False for m in materials], dtype=bool) & (kinds == GLASS),
-            portal_forced=np.array([m.portal is True for m in materials], dtype=bool) & (kinds == GLASS),
+            portal=np.array([m.portal is not False for m in materials], dtype=bool) & portal_kind,
+            portal_forced=np.array([m.portal is True for m in materials], dtype=bool) & portal_kind,
             fresnel=fresnel,
             panes=np.array([m.panes if m.fresnel else 1 for m in materials], dtype=np.int8),
             index=np.array([m.index if m.fresnel else GLASS_INDEX for m in materials], dtype=np.float64),

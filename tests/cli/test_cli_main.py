@@ -449,3 +449,11 @@ def test_help_of_the_new_commands(capsys):
             main([command, "--help"])
         out = capsys.readouterr().out
         assert exit_.value.code == 0 and all(w in out for w in words), (command, out)
+
+
+def test_validate_help_names_every_study():
+    from lbl_illum.cli.main import _STUDY_HELP
+    from lbl_illum_studies import STUDIES
+
+    listed = [line.split()[0] for line in _STUDY_HELP.splitlines()[1:] if line.strip()]
+    assert listed == list(STUDIES)
