@@ -132,6 +132,13 @@ class LightingContext:
         return self.direct.sun
 
     @property
+    def luminous_openings(self):
+        """The luminaires' luminous openings that camera rays and specular paths see
+        (:class:`~lbl_illum.engine.luminous_openings.LuminousOpenings`; None without any)."""
+        lum = self.direct.luminaires
+        return None if lum is None else lum.openings
+
+    @property
     def portals(self) -> TriangleSampler | None:
         """The portal triangles as a sampler (None without portals)."""
         return self.portal_set.sampler if self.portal_set is not None else None
@@ -154,10 +161,11 @@ class LightingContext:
         sky_light = not self.sky.is_dark
         if k == bounces:
             # at the bounce limit a record sees the sky, the ambient value, light surfaces
-            # by specular reflection (a mirror, the outside of a pane) and the sun's
+            # and luminaires' openings by specular reflection (a mirror, the outside of a pane) and the sun's
             # highlight on rough plastic (the sun's images in flat reflectors are direct
             # light at the hits, which the bounce limit does not reach)
-            reflected_light = (self.direct.has_lights and self.reflects) or self.sun_glossy
+            emitters = self.direct.has_lights or self.luminous_openings is not None
+            reflected_light = (emitters and self.reflects) or self.sun_glossy
             return sky_light or ambient > 0 or reflected_light
         return sky_light or not self.direct.is_dark or ambient > 0
 

@@ -56,14 +56,14 @@ def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
                     [options.level_samples(k) for k in range(options.bounces + 1)]),
     }
     if scene.luminaires:
-        # their photometry, placement and multiplier (only when there are any, so that the
-        # fingerprints of scenes without luminaires are those of earlier versions)
+        # their photometry, luminous opening, placement and multiplier (only when there are
+        # any, so that the fingerprints of scenes without luminaires are those of earlier versions)
         for lum in scene.luminaires:
             p = lum.photometry
             for arr in (p.horizontal, p.vertical, p.candela, lum.position, lum.frame):
                 h.update(np.ascontiguousarray(arr, np.float64).tobytes())
-        desc["luminaires"] = [(lum.photometry.kind, lum.photometry.symmetry, lum.multiplier)
-                              for lum in scene.luminaires]
+        desc["luminaires"] = [(lum.photometry.kind, lum.photometry.symmetry, lum.multiplier,
+                               dataclasses.astuple(lum.photometry.opening)) for lum in scene.luminaires]
     desc["sizing"] = SIZING_VERSION
     if options.interpolation == "hessian":      # other record radii
         desc["domains"] = "hessian"

@@ -10,7 +10,9 @@ stage                     what the ray carries (times the throughput of its chai
 ========================  ==============================================================
 escaped to the sky        the sky's luminance, or the ground glow below the horizon;
                           for images also the sun's disk (the policy's ``sun_disk``)
-hit an emitter            a ``light`` surface's luminance — for images always, for
+hit an emitter            a ``light`` surface's luminance, or a luminaire's opening's
+                          I(−d)/A_p(−d) (met before the scene's hit; the openings are
+                          not in the scene's geometry) — for images always, for
                           hemisphere rays only after a reflection: one met directly or
                           through glass was counted by the direct step (§5)
 diffuse hit               a hit (P, normals, weight = throughput · ρ_d/π) whose luminance
@@ -152,6 +154,7 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
     mats = context.materials
     tracer = context.tracer
     sky, sun = context.sky, context.sun
+    luminous = context.luminous_openings
     split = policy.glass == "split"
     n = len(origins)
     radiance = np.zeros((n, 3))
@@ -186,6 +189,15 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
                     reflected, sun_done = reflected[keep], sun_done[keep]
                     hits = Hits(hits.t[keep], hits.prim[keep])
                     reached, escaped = hits.hit, ~hits.hit
+        # -- luminaires' luminous openings met before the scene's hit: emitters under the
+        #    rule of light surfaces below; the ray ends there (lbl_illum.engine.luminous_openings)
+        if luminous is not None:
+            limit = np.minimum(hits.t, clip) if depth == 0 and tmax is not None else hits.t
+            seen, L = luminous.seen(o, d, limit, None if policy.emitters_always else reflected, tracer.length_scale)
+            if len(seen):
+                _add(radiance, ray[seen], through[seen] * L, split)
+                reached, escaped = reached.copy(), escaped.copy()
+                reached[seen] = escaped[seen] = False
         # -- escaped to the sky
         esc = np.flatnonzero(escaped)
         if len(esc):

@@ -11,6 +11,8 @@ the ray meets             it carries (times the throughput of the specular chain
 nothing (escapes)         the sky's luminance, or the ground glow below the horizon;
                           plus the sun's luminance E_dn/Ω inside its 6.8e-5 sr disk
 a ``light`` surface       the surface's luminance (two-sided Lambertian emitter)
+a luminaire's opening     I(−d)/A_p(−d) [cd/m²], its file's intensity over the opening's
+                          projected area (:mod:`lbl_illum.engine.luminous_openings`)
 a ``diffuse`` surface     L = ρ/π · E(P, N): E is the *full* illuminance at the hit P on
                           the side N facing the ray — direct light from the sun and the
                           light surfaces by shadow rays plus the indirect part

@@ -17,6 +17,11 @@ the aim, counter-clockwise seen from behind the luminaire (from above for a down
 A downlight at rotation 0 thus has C0 along +x and C90 along +y, as Radiance's
 ``ies2rad`` places it; rotation 90 puts C0 along +y.
 
+**Luminous opening.**  The file's opening (:class:`~lbl_illum.scene.photometric.LuminousOpening`)
+is centred on ``position`` in the luminaire's frame, its length along C0 and its width
+along C90; it lights the receivers near it as cells and shows the luminance I/A_p to
+camera rays and specular paths (:mod:`lbl_illum.engine.luminous_openings`).
+
 Units: position [m] (after the scene's units), intensity [cd].
 """
 

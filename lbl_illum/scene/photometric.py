@@ -62,7 +62,9 @@ class LuminousOpening:
     point, rectangle (in the plane z = 0, lit downwards and, if the table has upward light,
     upwards), box, disk, cylinder (axis z), sphere; ``length`` along x (C0–C180),
     ``width`` along y (C90–C270), ``height`` along z; a disk's, a cylinder's and a
-    sphere's diameter is ``length``."""
+    sphere's diameter is ``length``.  Centred on the photometric centre, as ``ies2rad``
+    places it.  Its luminance along ω is I(ω)/:meth:`projected_area` (ω)
+    (:mod:`lbl_illum.engine.luminous_openings`)."""
 
     shape: str
     length: float = 0.0

@@ -178,3 +178,19 @@ def test_a_luminaire_inside_a_wall_is_reported(tmp_path):
     ceiling = {"shape": "rectangle", "origin": [-3, -3, 2.8], "u": [6, 0, 0], "v": [0, 6, 0], "material": "black"}
     under = _scene(tmp_path, {"file": "lum.ies", "position": [0, 0, 2.79]}, [BLACK_FLOOR, ceiling])
     assert not any("luminaire" in n for n in Integrator(under, DIRECT_ONLY).portal_notes())
+
+
+def test_cache_fingerprint_tells_luminous_openings_apart(tmp_path):
+    """Two files that differ only in the luminous opening light a room differently (near
+    field, images), so a cache file made with one is not reused with the other."""
+    from lbl_illum.engine.fingerprint import scene_fingerprint
+
+    prints = set()
+    for dims in ((0, 0, 0), (0.6, 0.6, 0), (0.6, 1.2, 0), (-0.4, -0.4, 0)):
+        folder = tmp_path / "x".join(f"{d:g}" for d in dims)
+        folder.mkdir()
+        (folder / "lum.ies").write_text(ies_text(distribution, np.arange(0, 360.1, 5), dims=dims))
+        data = {"units": "m", "geometry": [BLACK_FLOOR], "materials": MATS, "sky": {"type": "none"},
+                "luminaires": [{"file": "lum.ies", "position": [0, 0, 2.0]}]}
+        prints.add(scene_fingerprint(scene_from_dict(data, folder, "test.toml"), Options()))
+    assert len(prints) == 4
