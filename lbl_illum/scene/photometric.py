@@ -110,6 +110,9 @@ class Photometry:
     opening: LuminousOpening
     lamp_lumens: float | None = None
     watts: float | None = None
+    #: what the reader passed over that the user should hear of (one line each, naming
+    #: the file and line), e.g. keywords LM-63 does not define
+    notes: tuple[str, ...] = ()
 
     def angles(self, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(horizontal, vertical) angles [deg] of unit emission ``directions`` (n, 3) in
@@ -287,7 +290,11 @@ def _read_ies(text: str, name: str) -> Photometry:
         raise InputError(f"{name}: line {tilt + 1}: TILT={setting[:40]}: a separate tilt file is not supported; "
                          "use TILT=NONE (or TILT=INCLUDE with the data in the file)")
     nums.integer("the number of lamps", 1)
+    line = nums.line()
     lumens = nums.number("the lumens per lamp")
+    if lumens == 0.0:
+        raise InputError(f"{name}: line {line}: the lumens per lamp must be > 0, or -1 for absolute photometry, "
+                         "got 0")
     line = nums.line()
     multiplier = nums.number("the candela multiplier")
     if multiplier <= 0.0:
@@ -341,7 +348,36 @@ def _read_ies(text: str, name: str) -> Photometry:
     del c_line
     return Photometry(name, kind, horizontal, vertical, candela, symmetry,
                       _ies_opening(width, length, height, name, tilt + 2),
-                      None if lumens < 0 else lumens, watts if watts > 0 else None)
+                      None if lumens < 0 else lumens, watts if watts > 0 else None,
+                      _keyword_notes(lines[1:tilt], name, year))
+
+
+#: The keywords of IES LM-63-1995, -2002 and -2019 (user keywords start with "_").
+IES_KEYWORDS = frozenset((
+    "TEST", "TESTLAB", "TESTDATE", "ISSUEDATE", "MANUFAC", "LUMCAT", "LUMINAIRE", "LAMPCAT", "LAMP",
+    "BALLAST", "BALLASTCAT", "MAINTCAT", "DISTRIBUTION", "FLASHAREA", "COLORCONSTANT", "LAMPPOSITION",
+    "NEARFIELD", "FILEGENINFO", "SEARCH", "OTHER", "MORE", "DATE", "PHOTOMETRIC_TYPE"))
+
+
+def _keyword_notes(lines: list[str], name: str, year: int) -> tuple[str, ...]:
+    """Notes on the keyword lines between the first line and ``TILT=`` of a file of
+    LM-63-1995 or later (files of 1986 have free text there): a line that is no
+    ``[KEYWORD] text`` line, or a keyword that the standard does not define and that does
+    not start with "_" (a user keyword), is passed over with a note naming its line."""
+    if year < 1995:
+        return ()
+    notes = []
+    for i, line in enumerate(lines, start=2):
+        text = line.strip()
+        if not text:
+            continue
+        match = re.match(r"\[([^\]]*)\]", text)
+        if match is None:
+            notes.append(f"{name}: line {i}: not a [KEYWORD] line, passed over: {text[:40]!r}")
+        elif not (match.group(1).upper() in IES_KEYWORDS or match.group(1).startswith("_")):
+            notes.append(f"{name}: line {i}: unknown keyword [{match.group(1)[:30]}] passed over "
+                         "(user keywords start with '_')")
+    return tuple(notes)
 
 
 def _complete_c(horizontal, candela, name, line):

@@ -194,6 +194,8 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     views = _no_overflow(lambda: views_from_table(data.get("views"), where, scale), f"{where}: [views]",
                          "the views")
     luminaires = luminaires_from_table(data.get("luminaires"), where, base_dir, scale)
+    photometries = {id(lum.photometry): lum.photometry for lum in luminaires}
+    warnings += [note for photometry in photometries.values() for note in photometry.notes]
     return Scene(triangles=triangles, materials=materials, sky=sky, sun=sun, options=options,
                  units=units, unit_scale=scale, warnings=warnings, portals=portals, views=views,
                  find_openings=find_openings, luminaires=luminaires)

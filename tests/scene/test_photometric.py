@@ -146,6 +146,8 @@ def test_tilt_include_with_unit_factors_is_read(tmp_path):
     (lambda t: t.rsplit("\n", 2)[0] + "\n", "the file ends before a candela value"),
     (lambda t: t + "12\n", "unexpected '12' after the"),
     (lambda t: t.replace("TILT=NONE\n", ""), "no 'TILT=' line"),
+    (lambda t: t.replace("TILT=NONE\n1 -1 ", "TILT=NONE\n1 0 "),
+     "line 5: the lumens per lamp must be > 0, or -1 for absolute photometry, got 0"),
 ])
 def test_ies_bad_files_name_the_file_and_line(tmp_path, change, message):
     text = change(ies_text(symmetric, np.array([0.0]), np.arange(0, 90.1, 10)))
@@ -228,3 +230,38 @@ def test_eulumdat_truncated(tmp_path):
     text = "\n".join(ldt_text(symmetric, 4).splitlines()[:60])
     with pytest.raises(InputError, match="^bad.ldt: line 60: the file ends before"):
         read_photometry(write(tmp_path, "bad.ldt", text))
+
+
+def _with_header(text, lines):
+    head, rest = text.split("\n", 1)
+    return "\n".join([head, *lines]) + "\n" + rest
+
+
+def test_unknown_ies_keywords_are_noted_with_their_lines(tmp_path):
+    """LM-63-2002 keyword lines: standard keywords and user ones ('_') pass silently; an
+    unknown keyword or a line that is none is passed over with a note naming the line."""
+    text = _with_header(ies_text(lambda g, c: 100.0 + 0 * g, np.array([0.0])),
+                        ["[LUMCAT] D-1", "[_OURS] anything", "[COLOUR] warm", "free text"])
+    path = tmp_path / "k.ies"
+    path.write_text(text)
+    notes = read_photometry(path).notes
+    assert notes == ("k.ies: line 4: unknown keyword [COLOUR] passed over (user keywords start with '_')",
+                     "k.ies: line 5: not a [KEYWORD] line, passed over: 'free text'")
+    # files of 1986 have free text before TILT=
+    path.write_text(_with_header(ies_text(lambda g, c: 100.0 + 0 * g, np.array([0.0]), version="IESNA91"),
+                                 ["free text"]))
+    assert read_photometry(path).notes == ()
+
+
+def test_keyword_notes_reach_the_scene_once_per_file(tmp_path):
+    from lbl_illum.scene import scene_from_dict
+
+    (tmp_path / "k.ies").write_text(_with_header(ies_text(lambda g, c: 100.0 + 0 * g, np.array([0.0])),
+                                                 ["[COLOUR] warm"]))
+    data = {"geometry": [{"shape": "rectangle", "origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0],
+                          "material": "m"}], "materials": {"m": {"type": "diffuse", "reflectance": 0.5}},
+            "sky": {"type": "none"},
+            "luminaires": [{"file": "k.ies", "position": [0.5, 0.5, 2]}, {"file": "k.ies", "position": [0, 0, 2]}]}
+    scene = scene_from_dict(data, tmp_path, "s.toml")
+    assert [w for w in scene.warnings if "COLOUR" in w] == [
+        "k.ies: line 2: unknown keyword [COLOUR] passed over (user keywords start with '_')"]

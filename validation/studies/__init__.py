@@ -36,6 +36,7 @@ STUDIES = {
     "sky-component": "sky_component",
     "office-daylight": "office_daylight",
     "corpus": "corpus",
+    "electric": "electric",
 }
 
 
