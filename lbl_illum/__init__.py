@@ -8,16 +8,22 @@ The public surface::
     result.illuminance            # (n,) lux
 """
 
-from ._version import __version__  # noqa: E402
-from .engine.cache import IrradianceCache  # noqa: E402
-from .errors import InputError  # noqa: E402
-from .engine.integrator import IlluminanceResult, Integrator  # noqa: E402
-from .options import Options  # noqa: E402
-from .scene.scenefile import Scene, load_scene  # noqa: E402
-from .io.points import read_points, write_results  # noqa: E402
+from __future__ import annotations
 
-__all__ = ["__version__", "IrradianceCache", "InputError", "IlluminanceResult", "Integrator",
-           "compute_illuminance", "Options", "Scene", "load_scene", "read_points", "write_results"]
+from ._public import public_surface
+from ._version import __version__
+from .errors import InputError
+from .options import Options
+
+# The engine (numba, Embree) and the scene loader are imported when first used, so that
+# ``lbl-illum --help`` and the command's argument checks start in a fraction of a second.
+_lazy, __getattr__, __dir__ = public_surface(globals(), {
+    "engine.cache": ("IrradianceCache",),
+    "engine.integrator": ("IlluminanceResult", "Integrator"),
+    "scene.scenefile": ("Scene", "load_scene"),
+    "io.points": ("read_points", "write_results"),
+})
+__all__ = sorted(["__version__", "InputError", "Options", "compute_illuminance", *_lazy])
 
 
 def compute_illuminance(scene: Scene, points, normals, options: Options | None = None,
@@ -37,6 +43,8 @@ def compute_illuminance(scene: Scene, points, normals, options: Options | None =
     >>> pts, nrm = read_points("examples/office/grid.pts", scene.unit_scale)  # doctest: +SKIP
     >>> compute_illuminance(scene, pts, nrm).illuminance.mean()   # doctest: +SKIP
     """
+    from .engine.integrator import Integrator
+
     integ = Integrator(scene, options, cache, progress)
     if cache_file is not None:
         from .io.cachefile import attach_cache_file

@@ -8,7 +8,7 @@ middle row of the ITU-R BT.709 RGB→XYZ matrix, taken from colour-science.
 
 Importing colour-science costs seconds, so the three weights are read from it
 once per installed colour-science version and remembered in the user's cache
-directory (``$LBL_ILLUM_CACHE_DIR`` or ``~/.cache/lbl_illum``).
+directory (:func:`user_cache_dir`).
 """
 
 from __future__ import annotations
@@ -21,14 +21,27 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["luminance_weights", "luminance"]
+__all__ = ["luminance_weights", "luminance", "user_cache_dir"]
+
+
+def user_cache_dir() -> Path | None:
+    """The folder of what lbl_illum keeps between runs (these weights, parsed geometry
+    files: :mod:`lbl_illum.scene.geometry_cache`): ``$LBL_ILLUM_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/lbl_illum``, else ``~/.cache/lbl_illum``; None when
+    ``LBL_ILLUM_CACHE_DIR=off`` (nothing kept)."""
+    root = os.environ.get("LBL_ILLUM_CACHE_DIR")
+    if root is not None and root.strip().lower() in ("off", "0", "no", "false"):
+        return None
+    return Path(root or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lbl_illum"))
 
 
 def _cache_file() -> Path:
-    root = os.environ.get("LBL_ILLUM_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lbl_illum")
+    root = user_cache_dir()
+    if root is None:
+        raise OSError("the cache is off")
     version = metadata.version("colour-science")
-    return Path(root) / f"bt709-luminance-weights-colour-{version}.json"
+    return root / f"bt709-luminance-weights-colour-{version}.json"
 
 
 def _weights_from_colour() -> np.ndarray:

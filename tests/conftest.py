@@ -4,7 +4,14 @@ them, and the closed forms and rooms that test modules of several layers use."""
 from __future__ import annotations
 
 import copy
+import os
+import tempfile
 from pathlib import Path
+
+# What lbl_illum keeps between runs (parsed geometry, luminance weights) goes to a folder of
+# the test session's own, not the user's: set before lbl_illum is imported, so command-line
+# tests run in child processes inherit it.
+os.environ["LBL_ILLUM_CACHE_DIR"] = tempfile.mkdtemp(prefix="lbl-illum-tests-")
 
 import numpy as np
 import pytest

@@ -18,8 +18,6 @@ import numpy as np
 
 from ..optional import check as check_optional
 from ..options import Options
-from ..engine.integrator import Integrator
-from ..engine.render import RenderResult, image_options, render_image
 from ..errors import InputError, plural
 from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
@@ -126,6 +124,8 @@ def _options_from_args(scene: Scene, args) -> Options:
     illuminance command), without ``point_samples``."""
     if _arg(args, "point_samples") is not None:
         raise InputError("--point-samples does not apply to images (every pixel would get its own evaluation)")
+    from ..engine.render import image_options
+
     return image_options(run_options(scene, args))
 
 
@@ -212,6 +212,9 @@ def render_command(args, progress=None) -> int:
     Bad input raises :class:`~lbl_illum.errors.InputError` before any file is written.
     ``progress`` replaces the tqdm bar (tests).
     """
+    # the engine is imported here, not with the module: the parser (--help) needs none of it
+    from ..engine.integrator import Integrator
+    from ..engine.render import render_image
     t0 = time.perf_counter()
     from ..io.images import write_image, write_preview
     from ..scene.scenefile import load_scene
@@ -276,7 +279,7 @@ def render_command(args, progress=None) -> int:
     return 0
 
 
-def _luminance_summary(result: RenderResult) -> dict[str, Any]:
+def _luminance_summary(result: "RenderResult") -> dict[str, Any]:
     lum = result.luminance[result.valid]
     if lum.size == 0:
         return {"median": 0.0, "mean": 0.0, "max": 0.0}

@@ -144,7 +144,8 @@ def load_mesh_file(path: Path, where: str, scale: float = 1.0, warnings: list[st
     list the messages are appended to).  A Radiance scene file (``.rad``) gives its
     surfaces, one part per modifier (:func:`lbl_illum.scene.radfile.read_rad_surfaces`).  A
     missing or unreadable file, or one without triangles, is an :class:`InputError`
-    starting with ``where``.
+    starting with ``where``.  A file read before (same bytes, scale and ``where``) comes
+    from :mod:`lbl_illum.scene.geometry_cache` without being parsed again.
     """
     path = Path(path)
     if path.is_dir():
@@ -158,9 +159,19 @@ def load_mesh_file(path: Path, where: str, scale: float = 1.0, warnings: list[st
         if not parts:
             raise InputError(f"{where}: the file contains no surfaces")
         return parts
+    from . import geometry_cache
+
+    key = geometry_cache.cache_key(path, where, scale)
+    kept = geometry_cache.load(key)
+    if kept is not None:                 # read before: no parse, no trimesh import
+        parts, notes = kept
+        if warnings is not None:
+            warnings.extend(notes)
+        return parts
+    notes: list[str] = []
     _quiet_trimesh()
     try:
-        scene = _load_trimesh_scene(path, where, scale, warnings)
+        scene = _load_trimesh_scene(path, where, scale, notes)
         parts = _scene_parts(scene, scale, obj_name=path.name if path.suffix.lower() == ".obj" else None,
                              where=where)
     except InputError:
@@ -174,6 +185,9 @@ def load_mesh_file(path: Path, where: str, scale: float = 1.0, warnings: list[st
         raise InputError(f"{where}: cannot read the file ({_reason(exc)})") from None
     if not parts:
         raise InputError(f"{where}: the file contains no triangles")
+    geometry_cache.store(key, parts, notes)
+    if warnings is not None:
+        warnings.extend(notes)
     return parts
 
 

@@ -457,3 +457,20 @@ def test_validate_help_names_every_study():
 
     listed = [line.split()[0] for line in _STUDY_HELP.splitlines()[1:] if line.strip()]
     assert listed == list(STUDIES)
+
+
+def test_help_imports_neither_numba_nor_the_engine():
+    """``lbl-illum --help`` and every command's ``--help`` build the parser without
+    importing numba, Embree or the engine (they cost most of a second): checked in a
+    fresh interpreter, whose modules are its own."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom lbl_illum.cli.main import main\n"
+            "for argv in (['--help'], ['illuminance', '--help'], ['render', '--help'], ['validate', '--help']):\n"
+            "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
+            "heavy = sorted(m for m in sys.modules if m.split('.')[0] in ('numba', 'embreex', 'trimesh', 'colour')"
+            " or m.startswith('lbl_illum.engine'))\n"
+            "print(heavy, file=sys.stderr)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stderr.strip() == "[]"

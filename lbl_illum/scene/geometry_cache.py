@@ -1,0 +1,103 @@
+"""Geometry files kept between runs, parsed: a run that reads the same model again skips
+the parse and the import of its reader.
+
+Reading an OBJ, PLY, STL, OFF or GLB file goes through trimesh, whose import alone
+(with scipy's spatial module) takes about 0.65 s, more than the whole calculation of a
+small grid at ``draft``.  Once a file is read, its parts (:class:`~lbl_illum.scene.geometry.MeshPart`:
+names and corners in metres) and the warnings the reading gave are kept in a cache
+folder; the next run of any scene that uses the same file, at the same scale, reads them
+back in milliseconds.  The key is the SHA-256 of the file's bytes, the scale, the place
+the file is named (messages quote it), the version of lbl_illum and
+:data:`READER_VERSION`: a file edited, moved to other units or read by another version is
+parsed again, never served stale.  Only formats that hold all their geometry in one file
+are kept (not ``.gltf`` with outside buffers, nor Radiance files, whose ``!xform`` lines
+read others).
+
+Where: ``geometry/`` in the user's cache folder (:func:`lbl_illum.photometry.user_cache_dir`:
+``$LBL_ILLUM_CACHE_DIR``, else ``$XDG_CACHE_HOME/lbl_illum``, else ``~/.cache/lbl_illum``;
+``LBL_ILLUM_CACHE_DIR=off`` keeps nothing).
+A folder that cannot be written, or an entry that cannot be read, only costs the parse:
+the cache never stops a run.  Entries are written whole (to a temporary name, then
+renamed), so two runs at once do not read each other's half-written files.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["CACHED_SUFFIXES", "READER_VERSION", "cache_folder", "cache_key", "load", "store"]
+
+#: Formats whose geometry lies wholly in the one file.
+CACHED_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb")
+#: Raised whenever the reading of geometry files changes what it gives.
+READER_VERSION = 1
+
+
+def cache_folder() -> Path | None:
+    """The folder of kept geometry (module text), or None when the cache is off."""
+    from ..photometry import user_cache_dir
+
+    root = user_cache_dir()
+    return None if root is None else root / "geometry"
+
+
+def cache_key(path: Path, where: str, scale: float) -> str | None:
+    """The key of ``path`` read at ``scale`` [m per file unit] for messages starting with
+    ``where``, or None when it is not kept (the cache is off, the format reads other
+    files, or the file cannot be read here)."""
+    from .._version import __version__
+
+    if path.suffix.lower() not in CACHED_SUFFIXES or cache_folder() is None:
+        return None
+    try:
+        digest = hashlib.sha256(path.read_bytes())
+    except OSError:
+        return None
+    digest.update(json.dumps([repr(float(scale)), where, __version__, READER_VERSION]).encode())
+    return digest.hexdigest()
+
+
+def load(key: str | None):
+    """``(parts, warnings)`` kept under ``key``, or None (no entry, or one that cannot be read)."""
+    from .geometry import MeshPart
+
+    if key is None:
+        return None
+    folder = cache_folder()
+    try:
+        with np.load(folder / f"{key}.npz", allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            parts = [MeshPart(p["name"], p["node"], p["group"], p["material"], np.array(data[f"v{i}"]))
+                     for i, p in enumerate(meta["parts"])]
+        return parts, list(meta["warnings"])
+    except (OSError, KeyError, ValueError, TypeError):
+        return None
+
+
+def store(key: str | None, parts, warnings) -> None:
+    """Keep ``parts`` and the ``warnings`` their reading gave under ``key`` (quietly
+    nothing when the folder cannot be written)."""
+    if key is None:
+        return
+    folder = cache_folder()
+    meta = {"parts": [{"name": p.name, "node": p.node, "group": p.group, "material": p.material} for p in parts],
+            "warnings": list(warnings)}
+    arrays = {f"v{i}": np.ascontiguousarray(p.vertices, np.float64) for i, p in enumerate(parts)}
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as out:
+                np.savez(out, meta=np.array(json.dumps(meta)), **arrays)
+            os.replace(tmp, folder / f"{key}.npz")
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    except OSError:
+        return

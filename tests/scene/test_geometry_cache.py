@@ -1,0 +1,117 @@
+"""Geometry files kept between runs (lbl_illum/scene/geometry_cache.py): a file read
+again comes back equal without being parsed; a changed file, scale or place is parsed
+again; the cache off, unwritable or damaged never stops a run."""
+
+import numpy as np
+import pytest
+
+from lbl_illum.scene import geometry
+from lbl_illum.scene.geometry import load_mesh_file
+
+# a unit square as one quad and a face of zero area (dropped, with a warning)
+OBJ = """v 0 0 0
+v 2 0 0
+v 2 1 0
+v 0 1 0
+v 5 5 5
+v 6 6 6
+v 7 7 7
+v 8 8 8
+g Floor
+usemtl carpet
+f 1 2 3 4
+g Junk
+usemtl carpet
+f 5 6 7 8
+"""
+
+
+@pytest.fixture
+def cache_on(tmp_path, monkeypatch):
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", str(folder))
+    return folder / "geometry"
+
+
+def _read(path, scale=1.0, where="room.toml: geometry[0]"):
+    warnings = []
+    parts = load_mesh_file(path, where, scale, warnings)
+    return parts, warnings
+
+
+def _no_parsing(monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("the file was parsed again")
+
+    monkeypatch.setattr(geometry, "_load_trimesh_scene", refuse)
+
+
+def test_a_file_read_again_comes_from_the_cache_equal(tmp_path, cache_on, monkeypatch):
+    path = tmp_path / "room.obj"
+    path.write_text(OBJ)
+    first, first_warnings = _read(path)
+    assert first_warnings and len(list(cache_on.glob("*.npz"))) == 1
+    _no_parsing(monkeypatch)
+    again, again_warnings = _read(path)
+    assert again_warnings == first_warnings
+    assert [(p.name, p.node, p.group, p.material) for p in again] == \
+        [(p.name, p.node, p.group, p.material) for p in first]
+    for a, b in zip(again, first):
+        assert a.vertices.dtype == np.float64 and np.array_equal(a.vertices, b.vertices)
+
+
+@pytest.mark.parametrize("change", ["bytes", "scale", "where"])
+def test_a_changed_file_scale_or_place_is_parsed_again(tmp_path, cache_on, monkeypatch, change):
+    path = tmp_path / "room.obj"
+    path.write_text(OBJ)
+    first, _ = _read(path)
+    calls = []
+    real = geometry._load_trimesh_scene
+    monkeypatch.setattr(geometry, "_load_trimesh_scene", lambda *a: calls.append(1) or real(*a))
+    if change == "bytes":
+        path.write_text(OBJ.replace("v 2 0 0", "v 3 0 0"))
+        parts, _ = _read(path)
+        assert parts[0].vertices.max() == 3.0
+    elif change == "scale":
+        parts, _ = _read(path, scale=0.3048)
+        assert np.allclose(parts[0].vertices, first[0].vertices * 0.3048)
+    else:
+        parts, warnings = _read(path, where="other.toml: geometry[2]")
+        assert all(w.startswith("other.toml: geometry[2]") for w in warnings)
+    assert calls == [1]
+
+
+def test_cache_off_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", "off")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    path = tmp_path / "room.obj"
+    path.write_text(OBJ)
+    _read(path)
+    assert not (tmp_path / "xdg").exists()
+
+
+def test_an_unwritable_cache_or_a_damaged_entry_costs_only_the_parse(tmp_path, monkeypatch):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", str(blocker))      # <file>/geometry cannot be made
+    path = tmp_path / "room.obj"
+    path.write_text(OBJ)
+    parts, _ = _read(path)
+    assert len(parts) >= 1
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", str(folder))
+    _read(path)
+    (entry,) = (folder / "geometry").glob("*.npz")
+    entry.write_bytes(b"damaged")
+    again, _ = _read(path)
+    assert np.array_equal(again[0].vertices, parts[0].vertices)
+
+
+def test_radiance_and_gltf_files_are_not_kept(tmp_path, cache_on):
+    from lbl_illum.scene.geometry_cache import cache_key
+
+    for name in ("room.rad", "room.gltf"):
+        (tmp_path / name).write_text("x")
+        assert cache_key(tmp_path / name, "w", 1.0) is None
+    (tmp_path / "room.obj").write_text(OBJ)
+    assert cache_key(tmp_path / "room.obj", "w", 1.0) is not None
