@@ -20,7 +20,7 @@ from .._version import __version__
 from ..errors import InputError
 from ..optional import check as check_optional
 from .shared import run_options
-from .progress import ProgressBar
+from .progress import ProgressBar, compile_notice
 from ..options import INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
 
@@ -335,6 +335,7 @@ def _compute(scene, args, points, normals):
     if not args.quiet:
         for note in integ.portal_notes():
             print(f"lbl-illum: note: {note}", file=sys.stderr)
+    compile_notice(enabled=not args.quiet)
     bar = _ProgressBar(enabled=not args.quiet)
     integ.progress = bar
     try:

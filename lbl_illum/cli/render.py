@@ -21,7 +21,7 @@ from ..options import Options
 from ..errors import InputError, plural
 from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
-from .progress import ProgressBar as _Bar
+from .progress import ProgressBar as _Bar, compile_notice
 from .shared import run_options
 
 __all__ = ["add_render_arguments", "render_command", "resolve_view", "scene_views", "check_image_size",
@@ -232,6 +232,7 @@ def render_command(args, progress=None) -> int:
     if not quiet:
         for note in integ.portal_notes():
             print(f"lbl-illum: note: {note}", file=sys.stderr)
+    compile_notice(enabled=not quiet and progress is None)
     bar = progress if progress is not None else _Bar(enabled=not quiet)
     integ.progress = bar
     try:

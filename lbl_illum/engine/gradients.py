@@ -10,9 +10,9 @@ paper's Eq. 5 interpolation uses them as first-order corrections.
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
+import numba
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import PARALLEL_MIN, in_threads, nogil_kernel
 from .hemisphere import _tangents
 
 __all__ = ["MIN_GRADIENT_DISTANCE", "irradiance_gradients", "limit_gradients"]
@@ -84,9 +84,12 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
     rot = np.zeros((r, C, 3))
     trans = np.zeros((r, C, 3))
     if r:
-        kernel = _gradients_kernels[r * distances.shape[1] * distances.shape[2] >= PARALLEL_MIN]
-        kernel(np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions),
-               np.ascontiguousarray(radiance), np.ascontiguousarray(distances), rot, trans)
+        args = (np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions),
+                np.ascontiguousarray(radiance), np.ascontiguousarray(distances), rot, trans)
+        if r * distances.shape[1] * distances.shape[2] >= PARALLEL_MIN:     # records on threads
+            in_threads(r, numba.get_num_threads(), lambda lo, hi: _gradients_kernel(*(a[lo:hi] for a in args)))
+        else:
+            _gradients_kernel(*args)
     return rot, trans
 
 
@@ -94,7 +97,7 @@ def _gradients(normals, directions, radiance, distances, rot, trans):
     """Compiled body of :func:`irradiance_gradients`: one record per iteration."""
     r, m, n = distances.shape
     C = radiance.shape[3]
-    for i in prange(r):
+    for i in range(r):
         nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
         tx, ty, tz, bx, by, bz = _tangents(nx, ny, nz)
         scale = np.pi / (m * n)
@@ -145,4 +148,4 @@ def _gradients(normals, directions, radiance, distances, rot, trans):
                     trans[i, ch, 2] += acc * uz
 
 
-_gradients_kernels = serial_and_parallel(_gradients)
+_gradients_kernel = nogil_kernel(_gradients)

@@ -48,9 +48,9 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from .compiled import serial_and_parallel
+from .compiled import in_threads, nogil_kernel
 from .hessian import LEAK_SECTORS
 
 __all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "MIN_ERROR", "LANES", "Layout", "insert_records", "freeze",
@@ -399,11 +399,11 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, V, leak, p
     answer depends on its query alone.  Everything is written out in one function: a
     call per query or per chunk would cost two atomic reference counts per array argument.
     """
-    nq = qP.shape[0]
+    nq = order.shape[0]
     n_levels = level_start.shape[0] - 1
     root = level_start[n_levels - 1]             # the top level's group; the root is lane 0
     n_level1 = (level_start[2] - level_start[1]) * LANES
-    for b in prange(n_blocks):
+    for b in range(n_blocks):
         stack = np.empty(LANES * (n_levels + 1), np.int64)
         cand = np.empty(CANDIDATES, np.int64)
         hit_j = np.empty(CANDIDATES, np.int64)
@@ -582,7 +582,7 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, V, leak, p
             k = k_end
 
 
-_lookup_kernels = serial_and_parallel(_lookup)
+_lookup_kernel = nogil_kernel(_lookup)
 
 
 def _covered(qP, qN, qZ, accuracy, shaped, V, leak, perm, pos, nr, box, level_start, out):
@@ -590,7 +590,7 @@ def _covered(qP, qN, qZ, accuracy, shaped, V, leak, perm, pos, nr, box, level_st
     first, and stops at the first record that serves it."""
     n_levels = level_start.shape[0] - 1
     root = level_start[n_levels - 1]
-    for q in prange(qP.shape[0]):
+    for q in range(qP.shape[0]):
         px, py, pz = qP[q, 0], qP[q, 1], qP[q, 2]
         nx, ny, nz = qN[q, 0], qN[q, 1], qN[q, 2]
         qz = np.float32(qZ[q])
@@ -647,7 +647,7 @@ def _covered(qP, qN, qZ, accuracy, shaped, V, leak, perm, pos, nr, box, level_st
         out[q] = found
 
 
-_covered_kernels = serial_and_parallel(_covered)
+_covered_kernel = nogil_kernel(_covered)
 
 
 def covered(qP, qN, qZ, layout: Layout, V, leak, shaped, accuracy, out, parallel):
@@ -657,8 +657,12 @@ def covered(qP, qN, qZ, layout: Layout, V, leak, shaped, accuracy, out, parallel
     on its own (no sort, no packets) and stops at the first record that passes Eqs. 5
     and 6 (elliptical, and outside its leak sectors, when ``shaped``).  ``out``: (q,) bool.
     """
-    _covered_kernels[bool(parallel)](qP, qN, qZ, accuracy, bool(shaped), V, leak, layout.perm, layout.pos, layout.nr,
-                                     layout.box, layout.level_start, out)
+    shared = (accuracy, bool(shaped), V, leak, layout.perm, layout.pos, layout.nr, layout.box, layout.level_start)
+    if not parallel:
+        _covered_kernel(qP, qN, qZ, *shared, out)
+        return
+    in_threads(len(qP), numba.get_num_threads(),
+               lambda lo, hi: _covered_kernel(qP[lo:hi], qN[lo:hi], qZ[lo:hi], *shared, out[lo:hi]))
 
 
 def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel):
@@ -689,6 +693,10 @@ def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accura
     # a few blocks per thread: each block allocates its own buffers (the list of
     # level-1 boxes is sized for all of them)
     n_blocks = min(len(qP) // 256 + 1, 8 * numba.get_num_threads()) if parallel else 1
-    _lookup_kernels[bool(parallel)](qP, qN, qZ, order, n_blocks, accuracy, bool(gradients), bool(shaped), V, leak,
-                                    layout.perm, layout.pos, layout.nr, layout.box, layout.level_start,
-                                    float(layout.packet_extent), out_E, out_w, out_n)
+    shared = (accuracy, bool(gradients), bool(shaped), V, leak, layout.perm, layout.pos, layout.nr, layout.box,
+              layout.level_start, float(layout.packet_extent), out_E, out_w, out_n)
+    if n_blocks == 1:
+        _lookup_kernel(qP, qN, qZ, order, 1, *shared)
+        return
+    # each block, a range of ``order``, on a thread: its queries' answers are its own
+    in_threads(len(order), n_blocks, lambda lo, hi: _lookup_kernel(qP, qN, qZ, order[lo:hi], 1, *shared))
