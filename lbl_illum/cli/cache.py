@@ -47,7 +47,7 @@ def add_cache_commands(subparsers) -> None:
     i = actions.add_parser(
         "info", help="header and per-level record statistics of cache files",
         description="Print a cache file's header (format version, fingerprint, the settings its records were "
-                    "made for) and per level: record count, radii R_i [m] (min, 10%%, median, 90%%, max), "
+                    "made for) and per level: record count, radii R_i [m] (min, 10%, median, 90%, max), "
                     "irradiance E_i [lux] (min, median, max) and the memory the records take once loaded. "
                     "The file is checked completely (checksum, array shapes and values) on the way.")
     i.add_argument("files", nargs="+", metavar="FILE", help="cache file(s)")

@@ -21,7 +21,7 @@ from ..errors import InputError
 from ..optional import check as check_optional
 from .shared import run_options
 from .progress import ProgressBar, compile_notice
-from ..options import INTERPOLATIONS, PRESETS, Options, preset_table
+from ..options import DEFAULT_PRESET, INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
 
 __all__ = ["main"]
@@ -99,11 +99,16 @@ def _studies():
 
 def _add_quality_options(p) -> None:
     """The quality options shared by ``illuminance`` and ``daylight-factor``; the defaults
-    shown are those of :class:`~lbl_illum.engine.options.Options`."""
-    d = Options()
-    q = p.add_argument_group("quality")
+    shown are what a run uses when neither the command line nor the scene's ``[settings]``
+    sets an option: :data:`~lbl_illum.options.DEFAULT_PRESET`'s values, read from
+    :data:`~lbl_illum.options.PRESETS` (the others from :class:`~lbl_illum.options.Options`)."""
+    d = Options().with_preset(DEFAULT_PRESET)
+    q = p.add_argument_group("quality", textwrap.fill(
+        "An option not given here comes from the scene's [settings], else from the "
+        f"'{DEFAULT_PRESET}' preset: its values are the defaults shown.", 88))
     q.add_argument("--preset", choices=tuple(PRESETS), metavar="NAME",
-                   help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it)")
+                   help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it; "
+                        f"default {DEFAULT_PRESET})")
     q.add_argument("--accuracy", type=_finite(0.0), metavar="A",
                    help=f"the paper's a (default {d.accuracy:g}; 0 = no interpolation)")
     q.add_argument("--bounces", type=_whole(0, MAX_BOUNCES), metavar="N",
@@ -139,9 +144,10 @@ def _add_file_options(p) -> None:
 def _add_report_options(p, thresholds: str, unit: str) -> None:
     """Summary thresholds, plan and 3-D view, shared by ``illuminance`` and ``daylight-factor``."""
     g = p.add_argument_group("summary and pictures", textwrap.fill(
-        "Every run writes OUT's name with .summary.json (mean, min, max, U0 = min/mean, min/max and the share of "
-        "points at or above each threshold, overall and per named area) and prints its overall figures.", 88))
+        "Every run prints its overall figures (mean, min, max, U0 = min/mean, min/max and the share of points at "
+        "or above each threshold); --summary writes them, overall and per named area, as JSON.", 88))
     unit = unit.replace("%", "%%")
+    g.add_argument("--summary", metavar="FILE", help="write the summary figures as JSON (default: none)")
     g.add_argument("--thresholds", nargs="+", type=_number, metavar="T",
                    help=f"thresholds [{unit}] for the shares of points at or above them (default {thresholds})")
     g.add_argument("--plot", metavar="PLAN", help="false-colour plan of the grid (.png, .pdf or .svg; matplotlib)")
@@ -245,8 +251,10 @@ def _build_parser() -> argparse.ArgumentParser:
                        "and write DIR/NAME/report.md, report.html, PNG plots and results.json (every number "
                        "in the report).", epilog=_STUDY_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     v.add_argument("study", choices=[*STUDIES, "all"], metavar="NAME", help="a study, or all")
-    v.add_argument("--report", default="docs/validation", metavar="DIR",
-                   help="folder of the reports (default docs/validation)")
+    v.add_argument("--report", default="lbl-illum-reports", metavar="DIR",
+                   help="folder of the reports (default lbl-illum-reports; the repository's own are in "
+                        "docs/validation)")
+    v.add_argument("--force", action="store_true", help="replace reports already in DIR (default: refuse)")
     v.add_argument("--quick", action="store_true", help="the reduced version (seconds, as the test suite runs it)")
     v.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
 
@@ -294,11 +302,6 @@ class RunError(Exception):
     """A failure that is not bad input (e.g. no OpenGL for a 3-D view): one line, exit 1."""
 
 
-def _summary_path(output) -> Path:
-    """Where a run's summary goes: OUT with its extension replaced by ``.summary.json``."""
-    return Path(output).with_suffix(".summary.json")
-
-
 def _check_run_files(args) -> None:
     """Refuse every bad output path before any work, so bad input leaves no file behind."""
     from ..viz.plots import check_plot_path
@@ -307,7 +310,7 @@ def _check_run_files(args) -> None:
     check_output_path(args.output)
     if args.rebuild_cache and not args.cache:
         raise InputError("--rebuild-cache: give the cache file with --cache FILE")
-    for extra in (args.stats, args.cache):
+    for extra in (args.stats, args.cache, args.summary):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
         if extra and Path(extra).is_dir():
@@ -385,7 +388,8 @@ def _report(args, scene, points, values, areas, quantity: str, unit: str, thresh
     doc = grid_summary(values, thresholds, areas, quantity=quantity.lower().replace(" ", "_"), unit=unit)
     doc = {"command": args.command, "scene": str(args.scene), "points_file": str(args.points),
            "output": str(args.output), **extra, **doc}
-    atomic_write_text(_summary_path(args.output), json.dumps(doc, indent=2) + "\n")
+    if args.summary:
+        atomic_write_text(args.summary, json.dumps(doc, indent=2) + "\n")
     if args.plot:
         from ..workplane.grid import plan_outline
         from ..viz.plots import plan_plot
@@ -418,7 +422,7 @@ def _view3d(scene, points, values, areas, label, screenshot, title=None) -> None
 
 def _run_illuminance(args) -> int:
     t0 = time.perf_counter()
-    from ..workplane.metrics import summary_line
+    from ..workplane.metrics import readable, summary_line
     from ..photometry import luminance
     from ..scene.scenefile import load_scene
     from ..io.points import read_points, write_results
@@ -437,8 +441,8 @@ def _run_illuminance(args) -> int:
     if args.stats:
         _write_stats(args, scene, result, options, seconds, {"illuminance": E})
     if not args.quiet:
-        print(f"lbl-illum: illuminance at {len(points)} points (mean {E.mean():.4g} lux, min {E.min():.4g}, "
-              f"max {E.max():.4g}) in {seconds:.2f} s; records per level {stats.records} "
+        print(f"lbl-illum: illuminance at {len(points)} points (mean {readable(E.mean())} lux, min {readable(E.min())}, "
+              f"max {readable(E.max())}) in {seconds:.2f} s; records per level {stats.records} "
               f"({stats.primary_evaluations} new); {stats.rays:,} rays; {summary_line(doc, extremes=False)} "
               f"-> {args.output}", file=sys.stderr)
     return 0
@@ -463,7 +467,7 @@ def _overcast_scene(scene, sky_illuminance: float, ground_reflectance: float | N
 
 def _run_daylight_factor(args) -> int:
     t0 = time.perf_counter()
-    from ..workplane.metrics import daylight_factor, summary_line, unobstructed_horizontal_illuminance
+    from ..workplane.metrics import daylight_factor, readable, summary_line, unobstructed_horizontal_illuminance
     from ..photometry import luminance
     from ..scene.scenefile import load_scene
     from ..io.points import read_points, write_results
@@ -487,8 +491,8 @@ def _run_daylight_factor(args) -> int:
     if args.stats:
         _write_stats(args, scene, result, options, seconds, {"daylight_factor": DF, "illuminance": E})
     if not args.quiet:
-        print(f"lbl-illum: daylight factor at {len(points)} points (mean {DF.mean():.4g}%, min {DF.min():.4g}, "
-              f"max {DF.max():.4g}) in {seconds:.2f} s under a CIE overcast sky (E_h {E_h:.6g} lux); records per "
+        print(f"lbl-illum: daylight factor at {len(points)} points (mean {readable(DF.mean())}%, min {readable(DF.min())}, "
+              f"max {readable(DF.max())}) in {seconds:.2f} s under a CIE overcast sky (E_h {readable(E_h)} lux); records per "
               f"level {stats.records} ({stats.primary_evaluations} new); {stats.rays:,} rays; "
               f"{summary_line(doc, extremes=False)} -> {args.output}", file=sys.stderr)
     return 0
@@ -661,6 +665,11 @@ def _run_validate(args) -> int:
     why_not = getattr(studies, "unavailable", lambda name: None)
     if args.study != "all" and (why := why_not(args.study)) is not None:
         raise InputError(f"validate {args.study}: cannot run here: {why}")
+    there = [name for name in names if (report_dir / name / "report.md").exists()]
+    if there and not args.force:
+        raise InputError(f"{report_dir / there[0]}: a report is there already"
+                         f"{f' (and {len(there) - 1} more)' if len(there) > 1 else ''}; "
+                         "give --force to replace it, or another --report folder")
     start, written, skipped = time.perf_counter(), [], []
     for name in names:
         why = why_not(name) if args.study == "all" else None

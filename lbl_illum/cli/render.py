@@ -22,6 +22,7 @@ from ..errors import InputError, plural
 from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
 from .progress import ProgressBar as _Bar, compile_notice
+from ..workplane.metrics import readable
 from .shared import run_options
 
 __all__ = ["add_render_arguments", "render_command", "resolve_view", "scene_views", "check_image_size",
@@ -276,7 +277,7 @@ def render_command(args, progress=None) -> int:
         print(f"lbl-illum: render {width} x {height} ({view.type_name}, {stats.pixel_samples} "
               f"sample{'s' if stats.pixel_samples != 1 else ''}/pixel) in {seconds:.2f} s; records per level "
               f"{stats.records} ({stats.records_made} new); {stats.rays:,} rays; luminance median "
-              f"{lum['median']:.4g}, max {lum['max']:.4g} cd/m2 -> {args.output}", file=sys.stderr)
+              f"{readable(lum['median'])}, max {readable(lum['max'])} cd/m2 -> {args.output}", file=sys.stderr)
     return 0
 
 

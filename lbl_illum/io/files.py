@@ -44,7 +44,8 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
 
 
 def read_text_file(path: str | os.PathLike, what: str = "", latin1: bool = False) -> str:
-    """The UTF-8 text of a file; a missing, unreadable or non-UTF-8 file is an
+    """The UTF-8 text of a file, without the byte-order mark spreadsheets and some editors
+    put first; a missing, unreadable or non-UTF-8 file is an
     :class:`InputError` naming it (and the line of the first bad byte).  ``latin1``:
     text that is not UTF-8 is read as ISO 8859-1 instead (photometric files from older
     tools carry a degree sign or a manufacturer's name in it)."""
@@ -59,7 +60,7 @@ def read_text_file(path: str | os.PathLike, what: str = "", latin1: bool = False
     except OSError as exc:
         raise InputError(f"{name}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         if latin1:
             return data.decode("latin-1")

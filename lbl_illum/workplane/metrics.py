@@ -37,7 +37,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-__all__ = ["area_figures", "grid_summary", "summary_line", "threshold_key", "unobstructed_horizontal_illuminance",
+__all__ = ["area_figures", "grid_summary", "readable", "summary_line", "threshold_key", "unobstructed_horizontal_illuminance",
            "daylight_factor", "SKY_QUADRATURE"]
 
 #: Nodes of the hemisphere quadrature of :func:`unobstructed_horizontal_illuminance`:
@@ -128,13 +128,24 @@ def _g(x) -> str:
     return "-" if x is None else f"{x:.3g}"
 
 
+def readable(x: float) -> str:
+    """A value as a person reads it in a summary: whole and grouped by thousands from
+    1,000 up (``10,930``, not ``1.093e+04``), four significant digits below (``424.2``,
+    ``0.0423``)."""
+    x = float(x)
+    if abs(x) >= 999.5 and abs(x) < 1e15:
+        return f"{x:,.0f}"
+    return f"{x:.4g}"
+
+
 def summary_line(doc: dict, extremes: bool = True) -> str:
     """One line of the overall figures, e.g.
     ``mean 512 lux, min 120, max 2400, U0 0.234, min/max 0.05, >=300 lux 62%``
     (without the first three when ``extremes`` is False)."""
     o, unit = doc["overall"], doc["unit"]
     sep = "" if unit == "%" else " "
-    parts = [f"mean {o['mean']:.4g}{sep}{unit}", f"min {o['min']:.4g}", f"max {o['max']:.4g}"] if extremes else []
+    parts = [f"mean {readable(o['mean'])}{sep}{unit}", f"min {readable(o['min'])}",
+             f"max {readable(o['max'])}"] if extremes else []
     parts += [f"U0 {_g(o['uniformity'])}", f"min/max {_g(o['min_max'])}"]
     parts += [f">={key}{sep}{unit} {100.0 * share:.0f}%" for key, share in o["at_or_above"].items()]
     return ", ".join(parts)

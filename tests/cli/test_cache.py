@@ -76,3 +76,12 @@ def test_cache_merge_command(office_quarter, office_cache, tmp_path, capsys):
     assert code == 2 and "no such cache file" in err and err.count("\n") == 1
     code, out, err = cache_cli(["cache", "merge", str(path)], capsys)      # -o is required
     assert code == 2 and err.count("\n") == 1
+
+
+def test_cache_info_help_prints_percent_signs_once(capsys):
+    from lbl_illum.cli.main import main
+
+    with pytest.raises(SystemExit):
+        main(["cache", "info", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "(min, 10%, median, 90%, max)" in out and "%%" not in out

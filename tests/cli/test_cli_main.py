@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from lbl_illum.cli.main import main
-from lbl_illum.options import PRESETS
+from lbl_illum.options import PRESETS, Options
 from lbl_illum.io.points import read_points
 
 from conftest import EXAMPLES
@@ -326,7 +326,7 @@ def test_daylight_factor_of_an_unobstructed_point_is_100(tmp_path, capsys):
     pts.write_text("0 0 0 0 0 1 open\n5 5 0 0 0 1 open\n")
     out = tmp_path / "df.csv"
     code, _, err = run(["daylight-factor", ground, "--points", pts, "-o", out, "--sky-illuminance", "20000",
-                        "--bounces", "1"], capsys)
+                        "--bounces", "1", "--summary", tmp_path / "df.summary.json"], capsys)
     assert code == 0 and "daylight factor at 2 points" in err and ">=2% 100%" in err
     lines = out.read_text().splitlines()
     assert lines[0] == "x,y,z,nx,ny,nz,daylight_factor,illuminance,direct,indirect,area"
@@ -390,7 +390,8 @@ def test_illuminance_run_writes_summary_plan_and_keeps_its_columns(tmp_path, cap
     assert run(["grid", office / "scene.toml", "-o", pts, "-q"], capsys)[0] == 0
     out, plan = tmp_path / "e.csv", tmp_path / "plan.png"
     code, _, err = run(["illuminance", office / "scene.toml", "--points", pts, "-o", out, "--plot", plan,
-                        "--preset", "draft", "--thresholds", "100", "1000"], capsys)
+                        "--preset", "draft", "--thresholds", "100", "1000", "--summary", tmp_path / "e.summary.json"],
+                       capsys)
     assert code == 0 and len(err.strip().splitlines()) == 1
     assert ">=100 lux" in err and ">=1000 lux" in err and "U0" in err
     header = out.read_text().splitlines()[0]
@@ -410,6 +411,7 @@ def test_illuminance_run_writes_summary_plan_and_keeps_its_columns(tmp_path, cap
     (["--plot", "plan.jpg"], "must end in"),
     (["--view3d", "nowhere/shot.png"], "does not exist"),
     (["--thresholds"], "expected at least one argument"),
+    (["--summary", "nowhere/df.summary.json"], "does not exist"),
 ])
 def test_daylight_factor_bad_input_one_line_exit_2_no_output(sphere_job, capsys, args, expect):
     tmp, pts = sphere_job
@@ -474,3 +476,74 @@ def test_help_imports_neither_numba_nor_the_engine():
             "print(heavy, file=sys.stderr)\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stderr.strip() == "[]"
+
+
+def test_no_summary_file_unless_asked(sphere_job, capsys):
+    """A run writes OUT and nothing beside it unless --summary (or --stats, --plot ...) asks."""
+    tmp, pts = sphere_job
+    out = tmp / "alone" / "df.csv"
+    out.parent.mkdir()
+    code, _, err = run(["daylight-factor", SPHERE / "scene.toml", "--points", pts, "-o", out] + FAST, capsys)
+    assert code == 0, err
+    assert sorted(p.name for p in out.parent.iterdir()) == ["df.csv"]
+
+
+def test_defaults_in_help_and_user_guide_are_the_code_s(capsys):
+    """The defaults --help prints and the user guide's option table states are what a run
+    without settings uses: the default preset's values (options.PRESETS), the rest
+    Options()'s."""
+    import re
+
+    from lbl_illum.options import DEFAULT_PRESET, PRESETS
+
+    d = Options().with_preset(DEFAULT_PRESET)
+    expected = {"--preset": DEFAULT_PRESET, "--accuracy": f"{d.accuracy:g}", "--bounces": str(d.bounces),
+                "--samples": str(d.samples), "--point-samples": str(d.point_samples), "--ambient": f"{d.ambient:g}",
+                "--seed": str(d.seed), "--interpolation": d.interpolation}
+    assert {k: PRESETS[DEFAULT_PRESET][k] for k in ("accuracy", "samples", "bounces", "point_samples",
+                                                     "interpolation")} == {
+        "accuracy": d.accuracy, "samples": d.samples, "bounces": d.bounces, "point_samples": d.point_samples,
+        "interpolation": d.interpolation}
+    with pytest.raises(SystemExit):
+        main(["illuminance", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    entries = {chunk.split()[0]: chunk for chunk in re.split(r" (?=--[a-z])", text.split("quality:", 1)[1])}
+    for option, value in expected.items():
+        assert re.search(r"default " + re.escape(value) + r"\b", entries[option]), (option, value, entries[option])
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "user-guide.md").read_text()
+    for option, value in expected.items():
+        row = re.search(r"^\| `" + re.escape(option) + r"[ `][^|]*\| ([^|]+) \|", guide, flags=re.M)
+        assert row and row.group(1).strip() == value, (option, row and row.group(1))
+
+
+def test_validate_never_replaces_a_report_without_force(tmp_path, capsys, monkeypatch, no_radiance):
+    """An existing DIR/NAME/report.md is refused before any work (one line, exit 2,
+    nothing changed); --force replaces it; without --report the reports go to
+    ./lbl-illum-reports."""
+    pytest.importorskip("matplotlib")
+    from lbl_illum.cli.main import _studies
+
+    studies = _studies()
+    ran = []
+
+    def fake_run(name, ctx, report_dir, command_dir=None):
+        ran.append((name, str(report_dir)))
+        folder = Path(report_dir) / name
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "report.md").write_text("# new\n")
+        return folder
+
+    monkeypatch.setattr(studies, "run_study", fake_run)
+    kept = tmp_path / "reports" / "extremes" / "report.md"
+    kept.parent.mkdir(parents=True)
+    kept.write_text("# committed\n")
+    code, _, err = run(["validate", "extremes", "--quick", "--report", tmp_path / "reports"], capsys)
+    assert code == 2 and err.strip() == (f"lbl-illum: error: {kept.parent}: a report is there already; "
+                                         "give --force to replace it, or another --report folder")
+    assert kept.read_text() == "# committed\n" and ran == []
+    code, _, err = run(["validate", "extremes", "--quick", "--report", tmp_path / "reports", "--force"], capsys)
+    assert code == 0 and kept.read_text() == "# new\n"
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(["validate", "extremes", "--quick"], capsys)
+    assert code == 0 and ran[-1] == ("extremes", "lbl-illum-reports")
+    assert (tmp_path / "lbl-illum-reports" / "extremes" / "report.md").is_file()

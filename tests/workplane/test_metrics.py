@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from lbl_illum.workplane.metrics import (area_figures, daylight_factor, grid_summary, summary_line,
+from lbl_illum.workplane.metrics import (area_figures, daylight_factor, grid_summary, readable, summary_line,
                                unobstructed_horizontal_illuminance)
 
 VALUES = [100.0, 200.0, 300.0, 400.0, 500.0, 600.0]
@@ -69,6 +69,18 @@ def test_summary_line():
     df = summary_line(grid_summary([1.0, 3.0], [2], quantity="daylight_factor", unit="%"))
     assert df == "mean 2%, min 1, max 3, U0 0.5, min/max 0.333, >=2% 50%"
     assert summary_line(grid_summary([1.0, 3.0], [2], unit="%"), extremes=False) == "U0 0.5, min/max 0.333, >=2% 50%"
+
+
+@pytest.mark.parametrize("x, text", [(10930.4, "10,930"), (1234567.0, "1,234,567"), (999.6, "1,000"),
+                                     (999.4, "999.4"), (424.24, "424.2"), (81.82, "81.82"), (0.04234, "0.04234"),
+                                     (0.0, "0"), (-1500.0, "-1,500")])
+def test_readable_numbers(x, text):
+    assert readable(x) == text
+
+
+def test_summary_line_of_a_sunlit_room_reads_without_exponents():
+    line = summary_line(grid_summary([120.0, 10930.0, 47012.3], [300]))
+    assert line.startswith("mean 19,354 lux, min 120, max 47,012, ") and "e+" not in line
 
 
 @pytest.mark.parametrize("luminance, expect", [

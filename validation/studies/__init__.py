@@ -41,8 +41,8 @@ STUDIES = {
 
 
 def command(name: str, quick: bool, report_dir: str = "docs/validation") -> str:
-    """The command that regenerates a report."""
-    return f"lbl-illum validate {name} --report {report_dir}" + (" --quick" if quick else "")
+    """The command that regenerates a report where it is (``--force``: it is there)."""
+    return f"lbl-illum validate {name} --report {report_dir} --force" + (" --quick" if quick else "")
 
 
 def repository_root() -> Path | None:
