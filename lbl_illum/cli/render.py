@@ -58,18 +58,19 @@ def resolve_view(scene: Scene, view: str | None = None, view_file: str | None = 
     """The view of a render command.
 
     ``view`` is Radiance view options (``"-vtv -vp 2 5.7 1.5 -vd 0 -1 -0.1"``, lengths in
-    metres) or the name of a ``[views.NAME]`` table of the scene file; ``view_file`` a
-    ``.vf`` file or Radiance picture.  With both a file and options, the options
-    change the file's view (as ``rpict -vf file -vp ...``).
+    the scene's units, as everything else typed) or the name of a ``[views.NAME]`` table
+    of the scene file; ``view_file`` a ``.vf`` file or Radiance picture (lengths in the
+    scene's units too).  With both a file and options, the options change the file's
+    view (as ``rpict -vf file -vp ...``).
     """
-    base = view_from_file(view_file) if view_file else None
+    base = view_from_file(view_file, unit_scale=scene.unit_scale) if view_file else None
     if view is None:
         if base is None:
             raise InputError("render: give a view (--view OPTIONS or NAME, or --view-file FILE)")
         return base
     text = view.strip()
     if _looks_like_options(text):
-        return view_from_string(text, "--view", base=base)
+        return view_from_string(text, "--view", base=base, unit_scale=scene.unit_scale)
     if base is not None:
         raise InputError(f"--view {text}: a named view cannot be combined with --view-file")
     views = scene_views(scene)
@@ -93,7 +94,7 @@ def add_render_arguments(parser) -> None:
     v = parser.add_argument_group("view")
     v.add_argument("--view", metavar="VIEW",
                    help="Radiance view options in one argument (--view=\"-vtv -vp 2 5.7 1.5 -vd 0 -1 -0.1 -vh 80 "
-                        "-vv 60\", lengths in metres) or the NAME of a [views.NAME] table of the scene file")
+                        "-vv 60\", lengths in the scene's units) or the NAME of a [views.NAME] table of the scene file")
     v.add_argument("--view-file", metavar="VF", help="a .vf file as rvu writes it (or a Radiance picture); "
                    "--view options, if given, change it")
     v.add_argument("-x", type=int, default=512, metavar="W", help="largest width in pixels (default 512)")

@@ -465,15 +465,22 @@ def sample_offsets(count: int) -> np.ndarray:
 # Parsing Radiance view options
 # ---------------------------------------------------------------------------
 
-def _apply_options(tokens: list[str], values: dict, where: str, strict: bool) -> int:
+#: View options whose numbers are lengths (in the scene's units as typed; metres in a View).
+_LENGTHS = ("p", "o", "a")
+
+
+def _apply_options(tokens: list[str], values: dict, where: str, strict: bool, unit_scale: float = 1.0) -> int:
     """Apply the view options among ``tokens`` to ``values``; return how many were found.
 
     Recognised options (``-vt?``, ``-vp``, ``-vd``, ``-vu``, ``-vh``, ``-vv``, ``-vo``,
     ``-va``, ``-vs``, ``-vl``) must have their numbers.  Other tokens are errors when
     ``strict``, and skipped one by one otherwise (Radiance's ``sscanview()``, which
-    reads views out of command lines with other options in them).
+    reads views out of command lines with other options in them).  Lengths (``-vp``,
+    ``-vo``, ``-va``, and ``-vh``/``-vv`` of a parallel view) are in the scene's units,
+    ``unit_scale`` metres each, as everything else the user types.
     """
     found = 0
+    given = set()
     i = 0
     while i < len(tokens):
         token = tokens[i]
@@ -506,7 +513,10 @@ def _apply_options(tokens: list[str], values: dict, where: str, strict: bool) ->
                 what = "a number" if count == 1 else f"{count} numbers"
                 got = " ".join(args) if args else "nothing"
                 raise InputError(f"{where}: {token} needs {what}, got '{got}'")
+            if key in _LENGTHS:
+                numbers = [x * unit_scale for x in numbers]
             values[_OPTION_FIELDS[key]] = tuple(numbers) if count == 3 else numbers[0]
+            given.add(key)
             found += 1
             i += 1 + count
             continue
@@ -516,6 +526,9 @@ def _apply_options(tokens: list[str], values: dict, where: str, strict: bool) ->
             raise InputError(f"{where}: unexpected '{token}' in a view (options are -vt? -vp -vd -vu -vh -vv "
                              "-vo -va -vs -vl)")
         i += 1
+    if values["type"] == "l":              # a parallel view's width and height are lengths
+        for key in given & {"h", "v"}:
+            values[_OPTION_FIELDS[key]] *= unit_scale
     return found
 
 
@@ -538,13 +551,14 @@ def _is_view_line_word(word: str) -> bool:
     return base in VIEW_LINE_WORDS
 
 
-def view_from_string(text: str, where: str = "--view", base: View | None = None) -> View:
+def view_from_string(text: str, where: str = "--view", base: View | None = None, unit_scale: float = 1.0) -> View:
     """A view from Radiance view options, e.g. ``"-vtv -vp 2 5.7 1.5 -vd 0 -1 -0.1 -vh 80 -vv 60"``.
 
     Options not given keep the value of ``base`` (Radiance's standard view by default,
     see :class:`View`).  The text may start with ``VIEW=`` or with the name of a
     Radiance program (``rvu``, ``rpict``, ...); anything else that is not a view option
-    is an error naming ``where``.
+    is an error naming ``where``.  Lengths are in the scene's units, ``unit_scale``
+    metres each (:func:`_apply_options`).
     """
     if not isinstance(text, str):
         raise InputError(f"{where}: a view must be text, got {text!r}")
@@ -555,7 +569,7 @@ def view_from_string(text: str, where: str = "--view", base: View | None = None)
     if tokens and not tokens[0].startswith("-") and _is_view_line_word(tokens[0]):
         tokens = tokens[1:]
     values = _view_values(base or View())
-    if _apply_options(tokens, values, where, strict=True) == 0:
+    if _apply_options(tokens, values, where, strict=True, unit_scale=unit_scale) == 0:
         raise InputError(f"{where}: no view options in {text.strip()!r}")
     return _make_view(values, where)
 
@@ -581,7 +595,7 @@ def view_lines(header_text: str) -> list[str]:
     return lines
 
 
-def view_from_file(path: str | os.PathLike, base: View | None = None) -> View:
+def view_from_file(path: str | os.PathLike, base: View | None = None, unit_scale: float = 1.0) -> View:
     """A view from a ``.vf`` file (as ``rvu`` writes it) or a Radiance picture's header.
 
     Every view line (see :func:`view_lines`; the first line of a ``.vf`` is usually
@@ -589,6 +603,8 @@ def view_from_file(path: str | os.PathLike, base: View | None = None) -> View:
     lines and later ones win, as in Radiance's ``viewfile()``.  Other words on those
     lines (``rpict -x 512 ...``) are skipped; a view option without its numbers is an
     error naming the file and line.  A picture's header ends at its first empty line.
+    Lengths are in the scene's units, ``unit_scale`` metres each (a ``.vf`` written
+    beside a model in feet is in feet).
     """
     path = Path(path)
     name = path.name
@@ -598,13 +614,13 @@ def view_from_file(path: str | os.PathLike, base: View | None = None) -> View:
         raise InputError(f"{name}: no such view file") from None
     except OSError as exc:
         raise InputError(f"{name}: cannot read ({exc.__class__.__name__})") from None
-    view = view_from_header(_header_text(raw), name, base)
+    view = view_from_header(_header_text(raw), name, base, unit_scale)
     if view is None:
         raise InputError(f"{name}: no view found (expected a line like 'rvu -vtv -vp ...' or 'VIEW= -vtv ...')")
     return view
 
 
-def view_from_header(text: str, where: str, base: View | None = None) -> View | None:
+def view_from_header(text: str, where: str, base: View | None = None, unit_scale: float = 1.0) -> View | None:
     """The view carried by the lines of a Radiance header or ``.vf`` text, None if none.
 
     See :func:`view_from_file` for the rules; ``where`` names the source in messages.
@@ -621,7 +637,7 @@ def view_from_header(text: str, where: str, base: View | None = None) -> View | 
         tokens = _tokens(body, f"{where}: line {number}")
         if tokens and not tokens[0].startswith("-"):
             tokens = tokens[1:]                       # the program name
-        found += _apply_options(tokens, values, f"{where}: line {number}", strict=False)
+        found += _apply_options(tokens, values, f"{where}: line {number}", strict=False, unit_scale=unit_scale)
     return _make_view(values, where) if found else None
 
 
@@ -673,7 +689,7 @@ def view_from_table(table: Mapping[str, Any], where: str, unit_scale: float = 1.
         others = [k for k in table if k != "radiance"]
         if others:
             raise InputError(f"{where}: 'radiance' gives the whole view; remove '{others[0]}'")
-        return view_from_string(table["radiance"], f"{where}: 'radiance'")
+        return view_from_string(table["radiance"], f"{where}: 'radiance'", unit_scale=unit_scale)
     kind = table.get("type", "perspective")
     if not isinstance(kind, str) or (kind not in TYPE_NAMES and kind not in VIEW_TYPES):
         raise InputError(f"{where}: 'type' must be one of {', '.join(TYPE_NAMES)}, got {kind!r}")

@@ -126,3 +126,15 @@ def test_render_command_refuses_bad_input_before_writing(tmp_path):
     integ.cache.save(scene_cache)
     with pytest.raises(InputError, match="point_samples"):
         render_command(command_args(tmp_path, cache=str(scene_cache)))
+
+
+def test_view_options_and_files_are_in_the_scene_units(tmp_path):
+    """A scene in millimetres: --view -vp 1200 ... is 1.2 m, not 1.2 km (it was metres)."""
+    import dataclasses
+
+    scene = dataclasses.replace(one_room(), unit_scale=0.001, units="mm")
+    view = resolve_view(scene, "-vtv -vp -1200 -1200 1600 -vd 1 1 0.3")
+    assert np.allclose(view.position, [-1.2, -1.2, 1.6])
+    vf = tmp_path / "v.vf"
+    vf.write_text("rvu -vtv -vp 1000 2000 3000 -vd 0 1 0\n")
+    assert np.allclose(resolve_view(scene, None, str(vf)).position, [1.0, 2.0, 3.0])

@@ -413,3 +413,29 @@ def test_rays_match_vwrays(text):
     assert (radiance_ok == ok).all()
     assert np.abs(o[ok] - ref[ok, :3]).max() < 1e-9
     assert np.abs(d[ok] - ref[ok, 3:]).max() < 1e-9
+
+
+FOOT = 0.3048
+
+
+def test_view_lengths_are_in_the_scene_units():
+    """-vp, -vo, -va (and -vh/-vv of a parallel view) are scaled to metres; angles and
+    directions are not."""
+    v = view_from_string("-vtv -vp 10 20 5 -vd 0 1 0 -vh 60 -vv 40 -vo 2 -va 30", unit_scale=FOOT)
+    assert np.allclose(v.position, [10 * FOOT, 20 * FOOT, 5 * FOOT])
+    assert v.fore == pytest.approx(2 * FOOT) and v.aft == pytest.approx(30 * FOOT)
+    assert v.horizontal == 60 and v.vertical == 40
+    p = view_from_string("-vtl -vp 0 0 10 -vd 0 0 -1 -vu 0 1 0 -vh 20 -vv 10", unit_scale=FOOT)
+    assert p.horizontal == pytest.approx(20 * FOOT) and p.vertical == pytest.approx(10 * FOOT)
+    # the same string in a scene in metres is unchanged
+    assert np.allclose(view_from_string("-vp 10 20 5").position, [10, 20, 5])
+
+
+def test_view_file_and_radiance_key_lengths_are_in_the_scene_units(tmp_path):
+    from lbl_illum.scene.views import view_from_table
+
+    (tmp_path / "desk.vf").write_text("rvu -vtv -vp 10 20 5 -vd 0 1 0 -vh 60 -vv 40\n")
+    assert np.allclose(view_from_file(tmp_path / "desk.vf", unit_scale=FOOT).position,
+                       [10 * FOOT, 20 * FOOT, 5 * FOOT])
+    v = view_from_table({"radiance": "-vtv -vp 10 20 5 -vd 0 1 0"}, "views.desk", unit_scale=FOOT)
+    assert np.allclose(v.position, [10 * FOOT, 20 * FOOT, 5 * FOOT])
