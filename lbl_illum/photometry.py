@@ -21,7 +21,17 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["luminance_weights", "luminance", "user_cache_dir"]
+__all__ = ["luminance_weights", "luminance", "user_cache_dir", "RADIANCE_WHITE_EFFICACY", "RADIANCE_SKY_EFFICACY",
+           "RADIANCE_SUN_EFFICACY"]
+
+#: Radiance's luminous efficacy of its RGB radiance [lm/W]: luminance [cd/m²] = 179 ×
+#: radiance (``WHTEFFICACY`` of Radiance's color.h).
+RADIANCE_WHITE_EFFICACY = 179.0
+#: The efficacies gensky divides its sky's and sun's luminance by to write radiance
+#: (``SKYEFFICACY`` = D65, 203 lm/W; ``SUNEFFICACY``, 208 lm/W): read back at 179, the
+#: sky Radiance renders is 179/203 of gensky's formula and the sun 179/208.
+RADIANCE_SKY_EFFICACY = 203.0
+RADIANCE_SUN_EFFICACY = 208.0
 
 
 def user_cache_dir() -> Path | None:

@@ -188,3 +188,17 @@ def ies_text(fn, horizontal, vertical=np.arange(0, 180.1, 2.5), version="IESNA:L
     for row in values:
         lines += wrap(row)
     return "\n".join(lines) + "\n"
+
+
+def radiance_tool(name: str) -> str | None:
+    """The path of one of Radiance's programs (the pyradiance wheel's, else on PATH), or None."""
+    import shutil
+
+    from lbl_illum.io.radiance import radiance_programs
+
+    programs = radiance_programs()
+    if programs is not None and programs["root"] is not None:
+        path = programs["root"] / "bin" / name
+        if path.is_file():
+            return str(path)
+    return shutil.which(name)

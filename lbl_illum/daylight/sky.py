@@ -80,6 +80,7 @@ import numpy as np
 
 from ..errors import InputError, check_keys, get_number
 from .solar import air_mass_kasten1966, extraterrestrial_normal_irradiance, precipitable_water
+from ..photometry import RADIANCE_SKY_EFFICACY, RADIANCE_SUN_EFFICACY, RADIANCE_WHITE_EFFICACY
 
 __all__ = [
     "Sky", "UniformSky", "CIEOvercastSky", "CIEGeneralSky", "PerezSky", "NoSky", "SKY_MODELS", "SKY_ALIASES",
@@ -307,6 +308,9 @@ CIE_GENERAL_SKY_TYPES = {
 #: strength.  (Radiance's ``gensky -i`` is the Matsuura intermediate sky, which is none of
 #: the 15 types.)
 SKY_ALIASES = {"cie-clear": 12, "cie-intermediate": 7}
+#: The CIE standard clear sky (ISO 15469 type 12): the distribution of Radiance's gensky +s
+#: (skybright.cal: 0.91 + 10 exp(−3χ) + 0.45 cos² χ is 1 + 10 (exp(−3χ) − exp(−3π/2)) + …)
+CLEAR_SKY_TYPE = 12
 
 
 @dataclass(frozen=True)
@@ -753,6 +757,39 @@ def _sky_type(table: Mapping[str, Any], where: str) -> int:
     return int(value)
 
 
+#: gensky's default atmospheric turbidity (Radiance's gensky ``-t``).
+GENSKY_TURBIDITY = 2.45
+#: [sr] Solid angle of the sun's disk in gensky's description (``source sun`` of 0.5°).
+GENSKY_SUN_SOLID_ANGLE = 2.0 * math.pi * (1.0 - math.cos(math.radians(0.25)))
+
+
+def gensky_clear_zenith_luminance(sun_altitude: float, turbidity: float = GENSKY_TURBIDITY) -> float:
+    """Zenith luminance L_z [cd/m²] of the clear sky that Radiance renders from ``gensky +s``
+    when no brightness is given.  gensky's formula gives 1000 [(1.376 T − 1.81) tan h +
+    0.38] cd/m² (Karayel, Navvab, Ne'eman & Selkowitz, "Zenith luminance and sky luminance
+    distributions for daylighting calculations", Energy and Buildings 6, 1984), T the
+    turbidity and h the sun's altitude, taken at 87° above that; 0 when negative.  gensky
+    writes it as radiance at 203 lm/W and Radiance reads luminance back at 179 lm/W, so the
+    sky rtrace computes with is 179/203 of the formula: that is returned, so that a scene
+    and its gensky twin agree (:data:`~lbl_illum.photometry.RADIANCE_SKY_EFFICACY`)."""
+    h = math.radians(min(float(sun_altitude), 87.0))
+    formula = max(0.0, 1000.0 * ((1.376 * turbidity - 1.81) * math.tan(h) + 0.38))
+    return formula * RADIANCE_WHITE_EFFICACY / RADIANCE_SKY_EFFICACY
+
+
+def gensky_direct_normal(sun_altitude: float) -> float:
+    """Direct normal illuminance E_dn [lux] of gensky's sun as Radiance renders it: gensky's
+    luminance 1.5e9 (1.147 − 0.147 / max(sin h, 0.16)) cd/m², written at 208 lm/W and read
+    back at 179 (:data:`~lbl_illum.photometry.RADIANCE_SUN_EFFICACY`), over a disk of 0.5°
+    (:data:`GENSKY_SUN_SOLID_ANGLE`), the sun's altitude h taken at 87° above that; 0 with
+    the sun below the horizon."""
+    if sun_altitude <= 0.0:
+        return 0.0
+    s = math.sin(math.radians(min(float(sun_altitude), 87.0)))
+    luminance = 1.5e9 * (1.147 - 0.147 / max(s, 0.16)) * RADIANCE_WHITE_EFFICACY / RADIANCE_SUN_EFFICACY
+    return luminance * GENSKY_SUN_SOLID_ANGLE
+
+
 def _scale(table: Mapping[str, Any], where: str) -> tuple[str, float]:
     """('horizontal_illuminance' | 'zenith_luminance', value) of a table (default E_h 10 000 lux)."""
     if "horizontal_illuminance" in table and "zenith_luminance" in table:
@@ -790,11 +827,14 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
         return _perez_from_table(table, where, sun_horizontal_illuminance, sun_position, day)
     general = kind == "cie-general" or kind in SKY_ALIASES
     check_keys(table, (*_COMMON_KEYS, *_SCALE_KEYS, *(("sky_type",) if kind == "cie-general" else ()),
-                       *extra_keys), where)
+                       "turbidity", *extra_keys), where)
     rho = get_number(table, "ground_reflectance", where, default=0.2, minimum=0.0, maximum=1.0)
     which, value = _scale(table, where)
     common = {"ground_reflectance": rho, "sun_horizontal_illuminance": sun_horizontal_illuminance}
     if not general:
+        if "turbidity" in table:
+            raise InputError(f"{where}: 'turbidity' sets the brightness of a clear sky (cie-clear) whose "
+                             "horizontal_illuminance and zenith_luminance are not given")
         if which == "zenith_luminance":
             value = _finite_product(value, np.pi if kind == "uniform" else 7.0 * np.pi / 9.0, where, which)
         return SKY_MODELS[kind](horizontal_illuminance=value, **common)
@@ -808,6 +848,13 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
         common.update(sun_altitude=None, sun_azimuth=None)
     else:
         common.update(sun_altitude=float(sun_position[0]), sun_azimuth=float(sun_position[1]) % 360.0)
+    if sky_type == CLEAR_SKY_TYPE and not any(key in table for key in _SCALE_KEYS):
+        # no brightness given: gensky's, from the sun's altitude and the turbidity
+        turbidity = get_number(table, "turbidity", where, default=GENSKY_TURBIDITY, minimum=1.0, maximum=20.0)
+        which, value = "zenith_luminance", gensky_clear_zenith_luminance(common["sun_altitude"], turbidity)
+    elif "turbidity" in table:
+        raise InputError(f"{where}: 'turbidity' sets the brightness of a clear sky (cie-clear) whose "
+                         "horizontal_illuminance and zenith_luminance are not given")
     if which == "zenith_luminance":
         unit = CIEGeneralSky(horizontal_illuminance=1.0, sky_type=sky_type, **common)
         value = _finite_product(value, 1.0 / unit.zenith_luminance, where, which)

@@ -58,6 +58,7 @@ from .files import atomic_write_text
 from ..scene.geometry import SPHERE_SUBDIVISIONS
 from ..scene.materials import GLASS_INDEX, Material, pane_transmissivity
 from ..daylight.sun import SUN_SOLID_ANGLE
+from ..photometry import RADIANCE_WHITE_EFFICACY
 
 __all__ = [
     "RADIANCE_EFFICACY", "RADIANCE_RGB_WEIGHTS", "MESH_THRESHOLD", "GLASS_MODELS", "SKY_MODEL_CODES",
@@ -68,7 +69,7 @@ __all__ = [
 ]
 
 #: Radiance's luminous efficacy of its white light [lm/W] (``WHTEFFICACY`` in color.h).
-RADIANCE_EFFICACY = 179.0
+RADIANCE_EFFICACY = RADIANCE_WHITE_EFFICACY
 #: Radiance's RGB → luminance weights (``bright()``: CIE Y of its default RGB primaries).
 RADIANCE_RGB_WEIGHTS = (0.265, 0.670, 0.065)
 #: Above this many plastic/glass triangles, and when ``obj2mesh`` is found, the geometry

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..photometry import RADIANCE_WHITE_EFFICACY
 
 __all__ = ["RadPrimitive", "read_rad", "rad_surfaces", "modifier_definitions", "material_tables",
            "read_rad_surfaces", "material_name", "SURFACE_TYPES", "SEGMENTS", "SPHERE_LEVEL"]
@@ -46,7 +47,7 @@ SPHERE_LEVEL = 2
 #: Radiance's material types (modifiers of surfaces); ``MATERIAL_TYPES`` are converted.
 MATERIAL_TYPES = ("plastic", "metal", "glass", "mirror", "trans", "light", "glow")
 #: Radiance's luminous efficacy for its RGB radiance: luminance [cd/m²] = 179 × radiance.
-WHITE_EFFICACY = 179.0
+WHITE_EFFICACY = RADIANCE_WHITE_EFFICACY
 #: Types that modify others without being a material this reader converts.
 OTHER_MODIFIERS = frozenset((
     "plastic2", "metal2", "trans2", "dielectric", "interface", "illum", "spotlight", "mist", "prism1",

@@ -48,7 +48,8 @@ from .geometry import (MAX_COORDINATE, Triangles, degenerate_mask, duplicate_mas
                        polygon_triangles, shape_from_table)
 from .materials import Material, MaterialTable, material_from_table
 from ..options import MAX_BOUNCES, Options, scene_defaults
-from ..daylight.sky import CIEGeneralSky, PerezSky, Sky, perez_sky_from_weather, sky_from_table
+from ..daylight.sky import (CLEAR_SKY_TYPE, CIEGeneralSky, PerezSky, Sky, gensky_direct_normal, perez_sky_from_weather,
+                             sky_from_table)
 from ..daylight.solar import day_of_year, read_epw, site_from_table, solar_position, to_utc
 from ..daylight.sun import Sun, sun_from_table, sun_position_at
 from .luminaires import luminaires_from_table
@@ -287,6 +288,8 @@ def daylight_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str
     sky = _sky(sky_table, sky_where, position, day)
     if sun_table is not None:
         default = sky.direct_normal_illuminance if isinstance(sky, PerezSky) else None
+        if isinstance(sky, CIEGeneralSky) and sky.sky_type == CLEAR_SKY_TYPE and position is not None:
+            default = gensky_direct_normal(position[0])      # beside a clear sky, gensky's sun
         sun = sun_from_table(sun_table, sun_where, site, default_direct_normal=default, site_where="[site]")
         if isinstance(sky, PerezSky) and "direct_normal_illuminance" in sun_table and \
                 sun.direct_normal_illuminance not in (0.0, sky.direct_normal_illuminance):

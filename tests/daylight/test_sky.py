@@ -367,3 +367,73 @@ def test_engine_sees_the_new_skies_horizontal_illuminance(open_ground, sky):
     pts, nrm = horizontal(5)
     E = compute_illuminance(scene, pts, nrm, Options(bounces=0, samples=2048, accuracy=0)).illuminance
     assert np.abs(E / scene.sky.horizontal_illuminance - 1.0).max() < 0.01
+
+
+# -- a clear sky and sun from the sun's altitude and the turbidity, as gensky computes them --
+
+def _clear_scene(sky, sun=None):
+    from lbl_illum.scene import scene_from_dict
+
+    data = {"geometry": [{"shape": "rectangle", "origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0],
+                          "material": "m"}], "materials": {"m": {"type": "diffuse", "reflectance": 0.5}},
+            "sky": sky, "sun": sun or {"altitude": 45, "azimuth": 180}}
+    return scene_from_dict(data, ".", "s.toml")
+
+
+def test_clear_sky_without_brightness_takes_gensky_s():
+    """cie-clear with neither horizontal_illuminance nor zenith_luminance: gensky's zenith
+    luminance 1000 [(1.376 T − 1.81) tan h + 0.38] cd/m² as Radiance renders it (× 179/203),
+    and a [sun] without direct_normal_illuminance gensky's sun (× 179/208 over 0.5°)."""
+    import math
+
+    scene = _clear_scene({"type": "cie-clear"})
+    formula = 1000.0 * ((1.376 * 2.45 - 1.81) * math.tan(math.radians(45)) + 0.38)        # 1941.2 cd/m²
+    assert scene.sky.zenith_luminance == pytest.approx(formula * 179 / 203, rel=1e-12)
+    omega = 2 * math.pi * (1 - math.cos(math.radians(0.25)))
+    sun = 1.5e9 * (1.147 - 0.147 / math.sin(math.radians(45))) * 179 / 208
+    assert scene.sun.direct_normal_illuminance == pytest.approx(sun * omega, rel=1e-12)
+    hazy = _clear_scene({"type": "cie-clear", "turbidity": 6.0})
+    assert hazy.sky.zenith_luminance > 2 * scene.sky.zenith_luminance
+    given = _clear_scene({"type": "cie-clear", "horizontal_illuminance": 12000},
+                         {"altitude": 45, "azimuth": 180, "direct_normal_illuminance": 70000})
+    assert given.sky.horizontal_illuminance == 12000 and given.sun.direct_normal_illuminance == 70000
+
+
+@pytest.mark.parametrize("sky, message", [
+    ({"type": "cie-clear", "horizontal_illuminance": 9000, "turbidity": 3}, "'turbidity' sets the brightness"),
+    ({"type": "cie-overcast", "turbidity": 3}, "'turbidity' sets the brightness"),
+    ({"type": "cie-clear", "turbidity": 0.5}, "'turbidity'"),
+])
+def test_turbidity_only_where_it_sets_the_brightness(sky, message):
+    with pytest.raises(InputError, match=message):
+        _clear_scene(sky, {"altitude": 45, "azimuth": 180, "direct_normal_illuminance": 0})
+
+
+def test_clear_sky_and_sun_match_radiance_gensky():
+    """Radiance's own gensky at five altitudes and two turbidities: the zenith and solar
+    radiance it writes (× 179 = what rtrace renders) within its four printed digits, and
+    the sky's horizontal illuminance within 1.5 % (gensky's polynomial for it) plus the
+    rounding of its printed ground level (one decimal)."""
+    import math
+    import subprocess
+
+    from conftest import radiance_tool
+
+    gensky = radiance_tool("gensky")
+    if gensky is None:
+        pytest.skip("Radiance (pyradiance) is not installed")
+    for turbidity in (2.45, 4.0):
+        for alt in (10.0, 30.0, 45.0, 60.0, 80.0):
+            out = subprocess.run([gensky, "-ang", str(alt), "0", "+s", "-t", str(turbidity), "-g", "1"],
+                                 capture_output=True, text=True, check=True).stdout.splitlines()
+            solar = float(next(l for l in out if l.startswith("3 ")).split()[1])
+            sky_args = next(l for l in out if l.startswith("7 ")).split()
+            zenith = float(sky_args[2])
+            ground = float(next(l for l in out if "Ground ambient level" in l).split()[-1])
+            scene = _clear_scene({"type": "cie-clear", "turbidity": turbidity}, {"altitude": alt, "azimuth": 180})
+            assert scene.sky.zenith_luminance / 179 == pytest.approx(zenith, rel=2e-3)
+            omega = 2 * math.pi * (1 - math.cos(math.radians(0.25)))
+            assert scene.sun.direct_normal_illuminance / omega / 179 == pytest.approx(solar, rel=2e-3)
+            # the ground level gensky prints is zenith · normfactor, before the sun and ρ_g: E_h / (179 π)
+            assert scene.sky.horizontal_illuminance == pytest.approx(179 * math.pi * ground,
+                                                                     rel=0.015 + 0.05 / ground)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 import subprocess
 
 import numpy as np
@@ -25,15 +24,9 @@ from lbl_illum.photometry import luminance, luminance_weights
 from lbl_illum.io.radiance import radiance_programs
 from lbl_illum.scene.views import view_from_string
 
+from conftest import radiance_tool
+
 PROGRAMS = radiance_programs()
-
-
-def radiance_tool(name):
-    if PROGRAMS is not None and PROGRAMS["root"] is not None:
-        path = PROGRAMS["root"] / "bin" / name
-        if path.is_file():
-            return str(path)
-    return shutil.which(name)
 
 
 needs_radiance = pytest.mark.skipif(radiance_tool("pvalue") is None or radiance_tool("getinfo") is None,
