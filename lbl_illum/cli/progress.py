@@ -1,9 +1,13 @@
 """The command line's progress: a tqdm bar on a terminal, plain lines elsewhere.
 
-On a terminal, a bar on standard error counts rays and names the stage (shown after one
-second).  When standard error is not a terminal (a log file, a job scheduler, a pipe),
-a plain line every :data:`LINE_SECONDS` says the stage, the rays so far and the seconds
-elapsed, so that a long run in a batch job shows it is alive.
+The engine reports rays (``update``), the stage (``describe``) and the share of its work
+done (``fraction``: the query blocks of each level, :meth:`RunPlan.fraction_done
+<lbl_illum.engine.integrator.RunPlan.fraction_done>`).  On a terminal, a bar on standard
+error shows the percentage, the time elapsed and left, the stage and the rays (after
+one second).  When standard error is not a terminal (a log file, a job scheduler, a
+pipe), a plain line every :data:`LINE_SECONDS` says the stage, the percentage and the
+time left (once known), the rays so far and the seconds elapsed.  The time left is
+elapsed · (1 − f)/f for a share f done: an estimate, as the levels' blocks differ in cost.
 """
 
 from __future__ import annotations
@@ -30,21 +34,32 @@ class ProgressBar:
         self.plain = enabled and not _is_terminal(self.stream)
         self.clock, self.label = clock, label
         self.start = self.last = clock()
-        self.rays, self.stage = 0, ""
+        self.rays, self.stage, self.done = 0, "", 0.0
         if enabled and not self.plain:
             from tqdm import tqdm
 
-            self.bar = tqdm(total=None, unit="ray", unit_scale=True, delay=1.0, file=self.stream,
-                            leave=False, dynamic_ncols=True)
+            self.bar = tqdm(total=100, delay=1.0, file=self.stream, leave=False, dynamic_ncols=True,
+                            bar_format="{desc} {percentage:3.0f}%|{bar}| {elapsed}<{remaining}{postfix}")
 
     def update(self, rays: int) -> None:
         if not rays:
             return
         self.rays += rays
         if self.bar is not None:
-            self.bar.update(rays)
+            self.bar.set_postfix_str(f"{self.rays:,} rays", refresh=False)
+            if self.clock() - self.start >= self.bar.delay:      # no bar for a run under a second
+                self.bar.refresh()
         elif self.plain:
             self._line()
+
+    def fraction(self, done: float) -> None:
+        """The share (0…1) of the work done; it never goes back."""
+        done = min(max(float(done), self.done), 1.0)
+        if done == self.done:
+            return
+        if self.bar is not None:
+            self.bar.update(100.0 * (done - self.done))
+        self.done = done
 
     def describe(self, text: str) -> None:
         self.stage = text
@@ -59,7 +74,13 @@ class ProgressBar:
             return
         self.last = now
         stage = f"{self.stage}, " if self.stage and self.stage != "done" else ""
-        print(f"{self.label}: {stage}{self.rays:,} rays, {now - self.start:.0f} s", file=self.stream, flush=True)
+        elapsed = now - self.start
+        share = ""
+        if self.done > 0.0:
+            share = f"{100.0 * self.done:.0f}%, "
+            if self.done >= 0.02:
+                share += f"about {elapsed * (1.0 - self.done) / self.done:.0f} s left, "
+        print(f"{self.label}: {stage}{share}{self.rays:,} rays, {elapsed:.0f} s", file=self.stream, flush=True)
 
     def close(self) -> None:
         if self.bar is not None:

@@ -227,6 +227,14 @@ class _Pending:
         return getattr(self, name)[0]
 
 
+def _block_share(done: int, blocks: int) -> float:
+    """Share of a level's work in its first ``done`` of ``blocks`` blocks (the first block
+    half of it when there are several: :meth:`RunPlan.fraction_done`)."""
+    if blocks == 1 or done == 0:
+        return float(done) / blocks if blocks == 1 else 0.0
+    return 0.5 + 0.5 * (done - 1) / (blocks - 1)
+
+
 @dataclass
 class RunPlan:
     """What one :meth:`Integrator.compute` hands its stages, and nothing keeps after it.
@@ -248,6 +256,23 @@ class RunPlan:
     stats: RunStats
     rays_reported: int = 0                #: rays already reported to the progress display
     open_blocks: dict = field(default_factory=dict)   #: level → its state when its open block began
+    #: per level being solved, [blocks done, blocks] (:meth:`fraction_done`)
+    block_stack: list = field(default_factory=list)
+
+    def fraction_done(self) -> float:
+        """Share (0…1) of the run's work done, for the progress display: an estimate, not a
+        measure.  Each level's query blocks are counted, and within a block the blocks of
+        the levels below that it solves first.  The first block of a level with several
+        weighs half the level, the others share the other half: it makes the records the
+        later ones find (on the office at ``high`` the first of level 1's 10 blocks took
+        about 70 % of the time)."""
+        done, scale = 0.0, 1.0
+        for finished, blocks in self.block_stack:
+            b = min(int(finished), blocks - 1)
+            lo, hi = _block_share(b, blocks), _block_share(b + 1, blocks)
+            done += scale * (lo + (hi - lo) * (finished - b))
+            scale *= hi - lo
+        return min(done, 1.0)
 
     def interreflected(self, k: int) -> float:
         """Estimate [lux] of the interreflected light in the value of a level-k record
@@ -339,11 +364,13 @@ class Integrator:
         return self.context.notes()
 
     # -- bookkeeping ----------------------------------------------------------------
-    def _tick(self, run: RunPlan, text=None):
+    def _tick(self, run: RunPlan, text=None, done: float | None = None):
         if self.progress is not None:
             if text:
                 self.progress.describe(text)
             self.progress.update(self.tracer.rays_traced - run.rays_reported)
+            if hasattr(self.progress, "fraction"):
+                self.progress.fraction(run.fraction_done() if done is None else done)
         run.rays_reported = self.tracer.rays_traced
 
     def _rng(self, *key):
@@ -637,7 +664,9 @@ class Integrator:
         own_parts = []
         n = len(q)
         blocks = max(1, -(-n // QUERY_BLOCK))
+        run.block_stack.append([0.0, blocks])
         for b in range(blocks):
+            run.block_stack[-1][0] = float(b)
             part = slice(b * QUERY_BLOCK, (b + 1) * QUERY_BLOCK)
             self._open_block(k, run)
             where = f", block {b + 1} of {blocks}" if blocks > 1 else ""
@@ -649,10 +678,12 @@ class Integrator:
             child = pending.cat("hit_importance", width=0) if pending.hit_importance else None
             hits = _Queries(hP, pending.cat("hit_Ns"), pending.cat("hit_Ng"), importance=child)
             own_next = self._solve_level(k + 1, hits, run) if deeper else None
+            run.block_stack[-1][0] = b + 1.0           # the block's levels below are solved
             self._tick(run, f"evaluating level {k}{where}")
             next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
             self.evaluate_level(k, pending, next_answer, run)
             self._close_block(k, run)
+        run.block_stack.pop()
         if any(own is None for own in own_parts):
             return None
         return np.concatenate(own_parts)
@@ -722,7 +753,7 @@ class Integrator:
                     own0 = self._solve_level(0, _Queries(points, normals, normals, origins), run)
 
                 # answers at the query points
-                self._tick(run, "direct light at the points")
+                self._tick(run, "direct light at the points", done=1.0)
                 direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
                                                  light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
                 if solved:
@@ -737,9 +768,9 @@ class Integrator:
                         exc.saved_cache = keeper.name
                 raise
             if keeper is not None:
-                self._tick(run, "writing the cache file")
+                self._tick(run, "writing the cache file", done=1.0)
                 keeper.save(self.cache)
-        self._tick(run, "done")
+        self._tick(run, "done", done=1.0)
         stats.records = self.cache.record_counts
         stats.rays = self.tracer.rays_traced - rays_before
         stats.seconds = time.perf_counter() - t0

@@ -73,3 +73,77 @@ def test_kernels_on_disk_reads_numba_index_files(monkeypatch, tmp_path):
     (tmp_path / "missing.nbi").write_bytes(b"")
     others = (octree._covered_kernel, octree.freeze, hemisphere._stratified_kernels[0])
     assert compiled.kernels_on_disk() is all(os.path.exists(k._cache._cache_file._index_path) for k in others)
+
+
+def test_plain_lines_give_the_share_done_and_the_time_left():
+    out, clock = io.StringIO(), Clock()
+    bar = ProgressBar(True, stream=out, clock=clock)
+    bar.fraction(0.25)
+    bar.describe("placing level 2")
+    clock.now += 10.0
+    bar.update(100)
+    bar.fraction(0.1)                                 # never goes back
+    clock.now += 10.0
+    bar.fraction(0.5)
+    bar.describe("evaluating level 1")
+    assert out.getvalue().splitlines() == [
+        "lbl-illum: placing level 2, 25%, about 30 s left, 100 rays, 10 s",
+        "lbl-illum: evaluating level 1, 50%, about 20 s left, 100 rays, 20 s"]
+
+
+def test_the_engine_reports_the_share_of_its_blocks_done(monkeypatch):
+    """With query blocks of 64, a run over a grid solves several blocks per level: the
+    shares it reports lie in 0…1, rise, and end at exactly 1."""
+    import numpy as np
+
+    from lbl_illum import Options, compute_illuminance
+    from lbl_illum.engine import integrator
+
+    from conftest import make_scene
+
+    monkeypatch.setattr(integrator, "QUERY_BLOCK", 64)
+    scene = make_scene([{"shape": "box", "center": [0, 0, 1.5], "size": [4, 4, 3], "material": "wall"}],
+                       {"wall": {"type": "diffuse", "reflectance": 0.5}}, {"type": "uniform"})
+    g = np.linspace(-1.5, 1.5, 12)
+    P = np.column_stack([np.repeat(g, 12), np.tile(g, 12), np.full(144, 0.8)])
+
+    class Recorder:
+        def __init__(self):
+            self.shares = []
+
+        def update(self, rays):
+            pass
+
+        def describe(self, text):
+            pass
+
+        def fraction(self, done):
+            self.shares.append(done)
+
+    rec = Recorder()
+    compute_illuminance(scene, P, np.tile([0, 0, 1.0], (144, 1)), Options(bounces=2, samples=32, accuracy=0.2),
+                        progress=rec)
+    s = np.array(rec.shares)
+    assert s[-1] == 1.0 and np.all((s >= 0) & (s <= 1))
+    inner = s[(s > 0) & (s < 1)]
+    assert len(np.unique(np.round(inner, 6))) >= 3          # it moves through the blocks
+    assert np.all(np.diff(s) >= -1e-12)                      # never back
+
+
+def test_terminal_bar_shows_percent_and_rays_after_one_second():
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    out, clock = Terminal(), Clock()
+    bar = ProgressBar(True, stream=out, clock=clock)
+    assert bar.bar is not None and not bar.plain
+    bar.describe("placing level 1")
+    bar.update(500)
+    bar.fraction(0.2)
+    assert out.getvalue() == ""                      # nothing for a run under a second
+    clock.now += 1.5
+    bar.update(500)
+    shown = out.getvalue().split("\r")[-1]
+    assert "placing level 1" in shown and "20%" in shown and "1,000 rays" in shown
+    bar.close()
