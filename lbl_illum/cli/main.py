@@ -151,6 +151,11 @@ def _add_report_options(p, thresholds: str, unit: str) -> None:
     g.add_argument("--thresholds", nargs="+", type=_number, metavar="T",
                    help=f"thresholds [{unit}] for the shares of points at or above them (default {thresholds})")
     g.add_argument("--plot", metavar="PLAN", help="false-colour plan of the grid (.png, .pdf or .svg; matplotlib)")
+    g.add_argument("--plot-title", metavar="TEXT", help="the plan's title (default: the quantity and the scene file)")
+    g.add_argument("--plot-scale", choices=("linear", "log"), default="linear",
+                   help="the plan's colour scale (default linear; log for sunlit rooms)")
+    g.add_argument("--plot-range", nargs=2, type=_number, metavar=("MIN", "MAX"),
+                   help="the plan's colour range (default: the values'), for sheets compared side by side")
     g.add_argument("--view3d", metavar="SHOT", help="3-D view of the room with the points coloured, written off "
                    "screen (.png; pyvista)")
 
@@ -317,6 +322,12 @@ def _check_run_files(args) -> None:
             raise InputError(f"{extra}: is a folder; give a file name")
     if args.plot:
         check_plot_path(args.plot)
+    elif args.plot_title is not None or args.plot_range is not None or args.plot_scale != "linear":
+        raise InputError("--plot-title, --plot-scale and --plot-range go with --plot PLAN")
+    if args.plot_range is not None and not args.plot_range[0] < args.plot_range[1]:
+        raise InputError(f"--plot-range: MIN must be below MAX, got {args.plot_range[0]:g} {args.plot_range[1]:g}")
+    if args.plot_range is not None and args.plot_scale == "log" and args.plot_range[0] <= 0.0:
+        raise InputError(f"--plot-range: a log scale needs MIN above 0, got {args.plot_range[0]:g}")
     if args.view3d:
         from ..viz.view3d import check_view_path
 
@@ -383,7 +394,7 @@ def _report(args, scene, points, values, areas, quantity: str, unit: str, thresh
     import numpy as np
 
     from ..io.files import atomic_write_text
-    from ..workplane.metrics import grid_summary
+    from ..workplane.metrics import grid_summary, summary_line
 
     doc = grid_summary(values, thresholds, areas, quantity=quantity.lower().replace(" ", "_"), unit=unit)
     doc = {"command": args.command, "scene": str(args.scene), "points_file": str(args.points),
@@ -396,7 +407,9 @@ def _report(args, scene, points, values, areas, quantity: str, unit: str, thresh
 
         walls, glazing = plan_outline(scene, float(np.median(points[:, 2])))
         plan_plot(args.plot, points, values, areas=areas, outline=walls, windows=glazing, quantity=quantity,
-                  unit=unit, thresholds=thresholds, title=f"{quantity} [{unit}], {Path(args.scene).name}")
+                  unit=unit, thresholds=thresholds, summary=summary_line(doc), scale=args.plot_scale,
+                  title=args.plot_title or f"{quantity} [{unit}], {Path(args.scene).name}",
+                  value_range=tuple(args.plot_range) if args.plot_range is not None else None)
     if args.view3d:
         _view3d(scene, points, values, areas, f"{quantity} [{unit}]", args.view3d,
                 title=f"{Path(args.scene).name}: {quantity.lower()}")

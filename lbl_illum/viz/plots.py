@@ -17,6 +17,7 @@ bad input raises :class:`~lbl_illum.errors.InputError` before anything is writte
 from __future__ import annotations
 
 import io
+import textwrap
 import math
 import os
 from pathlib import Path
@@ -27,7 +28,7 @@ from ..errors import InputError
 from ..io.files import atomic_write_bytes
 from ..optional import check
 
-__all__ = ["plan_plot", "check_plot_path", "PLOT_FORMATS", "nice_length"]
+__all__ = ["plan_plot", "check_plot_path", "PLOT_FORMATS", "PLAN_SCALES", "nice_length"]
 
 PLOT_FORMATS = (".png", ".pdf", ".svg")
 #: A triangle of the colour triangulation is dropped when its longest edge exceeds this
@@ -74,16 +75,26 @@ def _masked_triangulation(xy: np.ndarray):
     return tri
 
 
+#: Colour scales of a plan.
+PLAN_SCALES = ("linear", "log")
+
+
 def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | None = None, *,
               areas: np.ndarray | None = None, outline: np.ndarray | None = None,
               windows: np.ndarray | None = None, quantity: str = "Illuminance", unit: str = "lux",
-              thresholds=(), title: str | None = None, dpi: int = 150) -> None:
+              thresholds=(), title: str | None = None, summary: str | None = None, scale: str = "linear",
+              value_range: tuple[float, float] | None = None, dpi: int = 150) -> None:
     """Draw a plan of a grid into ``path`` (.png, .pdf or .svg).
 
     points : (n, 2 or 3) plan positions [m];  values : (n,) finite, or None to draw the
     points only;  areas : (n,) area names;  outline, windows : (k, 2, 2) plan segments [m];
     quantity, unit : colour-bar label, e.g. ``"Daylight factor"``, ``"%"``;
-    thresholds : values drawn as dashed isolines.
+    thresholds : values drawn as isolines, one line style each;  title : the sheet's title;
+    summary : a line of figures printed under it;  scale : ``"linear"`` or ``"log"`` (a
+    sunlit room: sun patches of 47,000 lux no longer turn the rest into one colour);
+    value_range : (min, max) of the colours (default: the values').  Nothing is drawn over
+    the room: the scale bar and the north arrow (+y) sit in a band below the plan, the
+    legend beside it.
     """
     path = check_plot_path(path)
     xy = np.asarray(points, dtype=np.float64)
@@ -105,15 +116,25 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
     walls, glazing = (np.zeros((0, 2, 2)) if s is None else np.asarray(s, dtype=np.float64).reshape(-1, 2, 2)
                       for s in (outline, windows))
     segments = [walls, glazing]
+    if scale not in PLAN_SCALES:
+        raise InputError(f"{path.name}: the colour scale must be one of {', '.join(PLAN_SCALES)}, got {scale!r}")
+    if value_range is not None and not (np.all(np.isfinite(value_range)) and value_range[0] < value_range[1]):
+        raise InputError(f"{path.name}: the colour range must be two finite numbers, the first below the second")
+    if scale == "log" and value_range is not None and value_range[0] <= 0.0:
+        raise InputError(f"{path.name}: a log colour scale needs a range above 0, got {value_range[0]:g}")
 
     from matplotlib.collections import LineCollection
+    from matplotlib.colors import LogNorm, Normalize
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import LogLocator, MaxNLocator
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
     lo, hi = _limits(xy, segments)
     width, height = hi - lo
+    band = max(0.5, 0.1 * height)           # below the plan: scale bar and north arrow
+    lo = lo - np.array([0.0, band])
+    height += band
     fig = Figure(figsize=(7.5, max(3.5, min(11.0, 6.0 * height / max(width, 1e-9) + 1.5))), dpi=dpi,
                  layout="constrained")
     ax = fig.add_subplot()
@@ -124,28 +145,42 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
     ax.set_ylabel("y (north) [m]")
     handles = []
     if values is not None:
-        vmin, vmax = float(values.min()), float(values.max())
+        vmin, vmax = value_range if value_range is not None else (float(values.min()), float(values.max()))
+        if scale == "log":
+            positive = values[values > 0.0]
+            floor = float(positive.min()) if len(positive) else 1.0
+            vmin, vmax = max(vmin, floor), max(vmax, floor * 10.0)
         if vmax <= vmin:
             vmin, vmax = vmin - 0.5 * max(abs(vmin), 1.0), vmax + 0.5 * max(abs(vmax), 1.0)
-        levels = [x for x in MaxNLocator(nbins=8).tick_values(vmin, vmax) if vmin < x < vmax]
+        norm = LogNorm(vmin, vmax, clip=True) if scale == "log" else Normalize(vmin, vmax, clip=True)
+        shown = np.clip(values, vmin, vmax)
+        locator = LogLocator(subs=(1.0, 2.0, 5.0)) if scale == "log" else MaxNLocator(nbins=8)
+        levels = [x for x in locator.tick_values(vmin, vmax) if vmin < x < vmax]
+        styles = ("dashed", "dashdot", "dotted", (0, (5, 1, 1, 1, 1, 1)))
         for name in dict.fromkeys(names.tolist()):
             sel = names == name
             tri = _masked_triangulation(xy[sel])
             if tri is None:
                 continue
-            ax.tripcolor(tri, values[sel], shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
+            ax.tripcolor(tri, shown[sel], shading="gouraud", cmap="viridis", norm=norm)
             if levels:
-                cs = ax.tricontour(tri, values[sel], levels=levels, colors="0.15", linewidths=0.6)
+                cs = ax.tricontour(tri, shown[sel], levels=levels, colors="0.15", linewidths=0.6)
                 ax.clabel(cs, fontsize=7, fmt="%g")
-            inside = [t for t in thresholds if vmin < t < vmax]
-            if inside:
-                ax.tricontour(tri, values[sel], levels=sorted(inside), colors="crimson", linewidths=1.4,
-                              linestyles="dashed")
-        sc = ax.scatter(xy[:, 0], xy[:, 1], c=values, cmap="viridis", vmin=vmin, vmax=vmax, s=9,
+            for i, t in enumerate(thresholds):
+                if vmin < t < vmax:
+                    ax.tricontour(tri, shown[sel], levels=[t], colors="crimson", linewidths=1.4,
+                                  linestyles=[styles[i % len(styles)]])
+        sc = ax.scatter(xy[:, 0], xy[:, 1], c=shown, cmap="viridis", norm=norm, s=9,
                         edgecolors="0.2", linewidths=0.3, zorder=3)
-        fig.colorbar(sc, ax=ax, shrink=0.85, label=f"{quantity} [{unit}]")
-        for t in thresholds:
-            handles.append(Line2D([], [], color="crimson", ls="--", lw=1.4, label=f"{t:g} {unit}"))
+        bar_ = fig.colorbar(sc, ax=ax, shrink=0.85, label=f"{quantity} [{unit}]" + (", log scale" if scale == "log" else ""))
+        if scale == "log":          # plain numbers at 1-2-5 steps, not powers of ten
+            from matplotlib.ticker import FuncFormatter
+
+            bar_.set_ticks([t for t in locator.tick_values(vmin, vmax) if vmin <= t <= vmax])
+            bar_.ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}" if v >= 10 else f"{v:g}"))
+            bar_.ax.minorticks_off()
+        for i, t in enumerate(thresholds):
+            handles.append(Line2D([], [], color="crimson", ls=styles[i % len(styles)], lw=1.4, label=f"{t:g} {unit}"))
     else:
         ax.scatter(xy[:, 0], xy[:, 1], s=9, color="0.1", zorder=3)
         handles.append(Line2D([], [], ls="", marker="o", ms=3, color="0.1", label=f"{len(xy)} points"))
@@ -161,11 +196,17 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
             ax.text(centre[0], centre[1], name, ha="center", va="center", fontsize=9, zorder=6,
                     bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.4", alpha=0.85))
     bar = nice_length(width)
-    ax.add_artist(AnchoredSizeBar(ax.transData, bar, f"{bar:g} m", "lower right", pad=0.4, borderpad=0.5,
-                                  sep=3, frameon=True, size_vertical=0.012 * height))
+    ax.add_artist(AnchoredSizeBar(ax.transData, bar, f"{bar:g} m", "lower right", pad=0.3, borderpad=0.3,
+                                  sep=3, frameon=False, size_vertical=0.012 * height))
+    # north arrow (+y is north) in the band's left end
+    tip = np.array([lo[0] + 0.06 * width, lo[1] + 0.85 * band])
+    ax.annotate("N", xy=tip, xytext=(tip[0], lo[1] + 0.15 * band), ha="center", va="bottom", fontsize=9,
+                fontweight="bold", arrowprops=dict(arrowstyle="-|>", color="black", lw=1.2))
     if handles:
-        ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.85)
-    ax.set_title(title or (f"{quantity} [{unit}]" if values is not None else "Sensor grid"), fontsize=10)
+        fig.legend(handles=handles, loc="outside lower center", ncols=min(4, len(handles)), fontsize=7,
+                   frameon=False)
+    heading = textwrap.fill(title or (f"{quantity} [{unit}]" if values is not None else "Sensor grid"), 60)
+    ax.set_title(heading + (f"\n{textwrap.fill(summary, 72)}" if summary else ""), fontsize=9)
     buf = io.BytesIO()
     fig.savefig(buf, format=path.suffix.lower()[1:])
     atomic_write_bytes(path, buf.getvalue())

@@ -547,3 +547,16 @@ def test_validate_never_replaces_a_report_without_force(tmp_path, capsys, monkey
     code, _, err = run(["validate", "extremes", "--quick"], capsys)
     assert code == 0 and ran[-1] == ("extremes", "lbl-illum-reports")
     assert (tmp_path / "lbl-illum-reports" / "extremes" / "report.md").is_file()
+
+
+@pytest.mark.parametrize("args, expect", [
+    (["--plot-title", "Level 2"], "--plot-title, --plot-scale and --plot-range go with --plot PLAN"),
+    (["--plot", "plan.png", "--plot-range", "500", "100"], "--plot-range: MIN must be below MAX"),
+    (["--plot", "plan.png", "--plot-scale", "log", "--plot-range", "0", "100"], "a log scale needs MIN above 0"),
+])
+def test_plan_options_checked_before_any_work(sphere_job, capsys, args, expect):
+    tmp, pts = sphere_job
+    out = tmp / "df.csv"
+    code, _, err = run(["daylight-factor", SPHERE / "scene.toml", "--points", pts, "-o", out] + FAST + args, capsys)
+    assert code == 2 and expect in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()

@@ -86,3 +86,28 @@ def test_bad_input_writes_nothing(tmp_path, l_room, name, change, expect):
 
 def test_nice_length():
     assert [nice_length(x) for x in (4.6, 10.0, 37.0, 0.9)] == [1.0, 2.0, 5.0, 0.2]
+
+
+def test_plan_sheet_has_title_summary_north_arrow_and_log_scale(tmp_path, l_room):
+    grid, walls, values = l_room
+    path = tmp_path / "plan.svg"
+    plan_plot(path, grid.points, values * 100, areas=grid.areas, outline=walls, thresholds=[300, 500, 2000],
+              title="Level 2, east wing", summary="mean 512 lux, min 120", scale="log")
+    text = path.read_text()
+    for label in ("Level 2, east wing", "mean 512 lux, min 120", ">N<", "log scale", "1 m", "2000 lux"):
+        assert label in text or label.strip("<>") in text, label
+    fixed = tmp_path / "fixed.svg"
+    plan_plot(fixed, grid.points, values, areas=grid.areas, outline=walls, value_range=(0.0, 5000.0))
+    assert "Illuminance [lux]" in fixed.read_text()
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"scale": "cubic"}, "colour scale must be one of linear, log"),
+    ({"value_range": (5.0, 1.0)}, "the first below the second"),
+    ({"scale": "log", "value_range": (0.0, 100.0)}, "log colour scale needs a range above 0"),
+])
+def test_plan_bad_scales_are_refused(tmp_path, l_room, kwargs, message):
+    grid, walls, values = l_room
+    with pytest.raises(InputError, match=message):
+        plan_plot(tmp_path / "p.png", grid.points, values, outline=walls, **kwargs)
+    assert not (tmp_path / "p.png").exists()
