@@ -23,6 +23,7 @@ from .shared import run_options
 from .progress import ProgressBar, compile_notice
 from ..options import DEFAULT_PRESET, INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
+from ..viz.plots import PLAN_SCALES
 
 __all__ = ["main"]
 
@@ -152,7 +153,7 @@ def _add_report_options(p, thresholds: str, unit: str) -> None:
                    help=f"thresholds [{unit}] for the shares of points at or above them (default {thresholds})")
     g.add_argument("--plot", metavar="PLAN", help="false-colour plan of the grid (.png, .pdf or .svg; matplotlib)")
     g.add_argument("--plot-title", metavar="TEXT", help="the plan's title (default: the quantity and the scene file)")
-    g.add_argument("--plot-scale", choices=("linear", "log"), default="linear",
+    g.add_argument("--plot-scale", choices=PLAN_SCALES, default=PLAN_SCALES[0],
                    help="the plan's colour scale (default linear; log for sunlit rooms)")
     g.add_argument("--plot-range", nargs=2, type=_number, metavar=("MIN", "MAX"),
                    help="the plan's colour range (default: the values'), for sheets compared side by side")

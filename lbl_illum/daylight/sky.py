@@ -790,6 +790,12 @@ def gensky_direct_normal(sun_altitude: float) -> float:
     return luminance * GENSKY_SUN_SOLID_ANGLE
 
 
+def _turbidity_refused(where: str) -> InputError:
+    """``turbidity`` given where it sets nothing (any sky but a clear one without a brightness)."""
+    return InputError(f"{where}: 'turbidity' sets the brightness of a clear sky (cie-clear) whose "
+                      "horizontal_illuminance and zenith_luminance are not given")
+
+
 def _scale(table: Mapping[str, Any], where: str) -> tuple[str, float]:
     """('horizontal_illuminance' | 'zenith_luminance', value) of a table (default E_h 10 000 lux)."""
     if "horizontal_illuminance" in table and "zenith_luminance" in table:
@@ -833,8 +839,7 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
     common = {"ground_reflectance": rho, "sun_horizontal_illuminance": sun_horizontal_illuminance}
     if not general:
         if "turbidity" in table:
-            raise InputError(f"{where}: 'turbidity' sets the brightness of a clear sky (cie-clear) whose "
-                             "horizontal_illuminance and zenith_luminance are not given")
+            raise _turbidity_refused(where)
         if which == "zenith_luminance":
             value = _finite_product(value, np.pi if kind == "uniform" else 7.0 * np.pi / 9.0, where, which)
         return SKY_MODELS[kind](horizontal_illuminance=value, **common)
@@ -853,8 +858,7 @@ def sky_from_table(table: Mapping[str, Any] | None, where: str, sun_horizontal_i
         turbidity = get_number(table, "turbidity", where, default=GENSKY_TURBIDITY, minimum=1.0, maximum=20.0)
         which, value = "zenith_luminance", gensky_clear_zenith_luminance(common["sun_altitude"], turbidity)
     elif "turbidity" in table:
-        raise InputError(f"{where}: 'turbidity' sets the brightness of a clear sky (cie-clear) whose "
-                         "horizontal_illuminance and zenith_luminance are not given")
+        raise _turbidity_refused(where)
     if which == "zenith_luminance":
         unit = CIEGeneralSky(horizontal_illuminance=1.0, sky_type=sky_type, **common)
         value = _finite_product(value, 1.0 / unit.zenith_luminance, where, which)

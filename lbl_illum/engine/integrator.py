@@ -231,7 +231,7 @@ def _block_share(done: int, blocks: int) -> float:
     """Share of a level's work in its first ``done`` of ``blocks`` blocks (the first block
     half of it when there are several: :meth:`RunPlan.fraction_done`)."""
     if blocks == 1 or done == 0:
-        return float(done) / blocks if blocks == 1 else 0.0
+        return float(done)
     return 0.5 + 0.5 * (done - 1) / (blocks - 1)
 
 

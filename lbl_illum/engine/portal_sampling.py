@@ -36,8 +36,8 @@ from .context import LightingContext
 from .paths import HEMISPHERE, MAX_SPECULAR_DEPTH, follow_paths
 from .raycast import Hits, step_past
 
-__all__ = ["PORTAL_SAMPLE_FRACTION", "TRANSLUCENT_SOLID_ANGLE", "portal_sample_plan", "solid_angle", "portal_density", "hemisphere_weight",
-           "PortalBalanceWeights", "trace_hemisphere_rays", "portal_samples"]
+__all__ = ["PORTAL_SAMPLE_FRACTION", "TRANSLUCENT_SOLID_ANGLE", "portal_sample_plan", "solid_angle", "portal_density",
+           "hemisphere_weight", "PortalBalanceWeights", "trace_hemisphere_rays", "portal_samples"]
 
 #: Portal samples per primary evaluation, as a fraction of its hemisphere samples.
 PORTAL_SAMPLE_FRACTION = 0.5
@@ -63,11 +63,10 @@ def portal_sample_plan(context: LightingContext, P, S: int) -> tuple[np.ndarray 
     if context.portals is None:
         return None, 0
     inside = np.flatnonzero(context.portal_set.inside(P))
-    sheets = context.translucent_portal[context.portal_prim[context.portal_prim >= 0]]
-    if len(inside) and sheets.any():
-        glass_count = int(np.count_nonzero(context.portal_prim >= 0))
-        triangles = context.portals.vertices[:glass_count][sheets]
-        inside = inside[solid_angle(P[inside], triangles) <= TRANSLUCENT_SOLID_ANGLE]
+    prim = context.portal_prim
+    sheets = np.flatnonzero(prim >= 0)[context.translucent_portal[prim[prim >= 0]]]      # portal triangle indices
+    if len(inside) and len(sheets):
+        inside = inside[solid_angle(P[inside], context.portals.vertices[sheets]) <= TRANSLUCENT_SOLID_ANGLE]
     n_p = 0
     if len(inside):
         gx, gy = context.portals.grid(max(1, int(round(PORTAL_SAMPLE_FRACTION * S))))

@@ -17,9 +17,9 @@ bad input raises :class:`~lbl_illum.errors.InputError` before anything is writte
 from __future__ import annotations
 
 import io
-import textwrap
 import math
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
