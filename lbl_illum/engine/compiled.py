@@ -1,28 +1,32 @@
-"""Compiling array kernels with numba, serial and parallel.
+"""Compiling array kernels with numba, each once, run on every core for large inputs.
 
 numba's ``parallel=True`` kernels run on a thread pool that costs milliseconds to wake
-on a busy machine: more than a loop over a few thousand items takes on one core.  The
-engine makes many small calls (a placement pass over a few hundred queries, a level of
-a few records), so a kernel written with ``prange`` is either compiled twice, the call
-picking the parallel one only for large inputs (:func:`serial_and_parallel`), or
-compiled once without the GIL and run over ranges of its items on Python threads
-(:func:`nogil_kernel`, :func:`in_threads`).  The second costs one compilation instead
-of two: the parallel twins of the cache lookups and gradients took 8.4 of the 22.6 s of
-the office example's first run (the kernels' compile times measured one by one).
+on a busy machine: more than a loop over a few thousand items takes on one core; and a
+parallel kernel compiles twice as slowly as a serial one, and had to be compiled a second
+time, serial, for the engine's many small calls (a placement pass over a few hundred
+queries, a level of a few records).  So every kernel is compiled once, without the GIL,
+and a large call runs it over ranges of its items on Python threads:
+:func:`nogil_kernel` with :func:`in_threads` where the kernel takes its range itself,
+:class:`RowKernel` where its iterations are the rows of some of its arrays (written with
+``prange``, which a serial kernel runs as ``range``).  The parallel twins of the cache
+lookups and gradients took 8.4 of the 22.6 s of the office example's first run, those of
+the hemisphere directions and hit points another 1.0 s (each kernel's compile time measured
+one by one, ``numba:compile`` events).
 """
 
 from __future__ import annotations
 
-import types
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
 from numba import njit
 
-__all__ = ["PARALLEL_MIN", "serial_and_parallel", "nogil_kernel", "in_threads"]
+__all__ = ["PARALLEL_MIN", "RowKernel", "nogil_kernel", "in_threads"]
 
 #: Items (rays, queries) from which a kernel runs on every core.
 PARALLEL_MIN = 100_000
+#: Ranges per thread a :class:`RowKernel` call is cut into (rows of unequal cost balance out).
+PIECES_PER_THREAD = 4
 _POOL: list[ThreadPoolExecutor] = []
 
 
@@ -45,16 +49,35 @@ def in_threads(n: int, pieces: int, call) -> None:
         pass
 
 
-def serial_and_parallel(func):
-    """``(serial, parallel)`` compiled versions of ``func`` (written with ``prange``).
+class RowKernel:
+    """A kernel whose iterations are independent rows of some of its arrays, compiled once
+    (:func:`nogil_kernel`).
 
-    Index the pair with ``n >= threshold`` to pick one.  The parallel version is compiled
-    from a renamed copy of the function: numba's on-disk cache is keyed by the function's
-    name, not by its compile options, and one would overwrite the other.
+    ``rows`` are the positions of the arguments cut by rows (their first axis is the
+    kernel's ``prange``); the others are passed whole.  A call with ``work`` of at least
+    PARALLEL_MIN (default: the number of rows) runs the kernel on consecutive row ranges
+    on every thread, a smaller one on the calling thread; each row is computed alike
+    either way, so results do not depend on the split.
     """
-    twin = types.FunctionType(func.__code__, func.__globals__, func.__name__ + "_parallel")
-    twin.__qualname__ = func.__qualname__ + "_parallel"
-    return njit(cache=True)(func), njit(cache=True, parallel=True)(twin)
+
+    def __init__(self, func, rows: tuple[int, ...]):
+        self.kernel = nogil_kernel(func)
+        self.rows = tuple(rows)
+
+    def __call__(self, *args, work: int | None = None) -> None:
+        n = args[self.rows[0]].shape[0]
+        threads = numba.config.NUMBA_NUM_THREADS
+        if (n if work is None else work) < PARALLEL_MIN or threads < 2 or n < 2:
+            self.kernel(*args)
+            return
+
+        def rows(lo: int, hi: int) -> None:
+            cut = list(args)
+            for k in self.rows:
+                cut[k] = args[k][lo:hi]
+            self.kernel(*cut)
+
+        in_threads(n, min(n, PIECES_PER_THREAD * threads), rows)
 
 
 def kernels_on_disk() -> bool:
@@ -68,7 +91,7 @@ def kernels_on_disk() -> bool:
     from . import hemisphere, octree
 
     try:
-        kernels = (octree._lookup_kernel, octree._covered_kernel, octree.freeze, hemisphere._stratified_kernels[0])
+        kernels = (octree._lookup_kernel, octree._covered_kernel, octree._layout, hemisphere._stratified_kernel.kernel)
         return all(os.path.exists(k._cache._cache_file._index_path) for k in kernels)
     except AttributeError:
         return True

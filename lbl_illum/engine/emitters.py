@@ -53,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import RowKernel
 from .hemisphere import _tangents
 from .lambert import _clip_above, lambert_polygon
 from ..photometry import luminance
@@ -344,7 +344,7 @@ def _plan(P, N, O, U, tri_v, tri_n, tri_area, tri_far2, tri_L, tri_Y, sph_c, sph
             out_w[i, j] = 0.0
 
 
-_plan_kernels = serial_and_parallel(_plan)
+_plan_kernel = RowKernel(_plan, rows=(0, 1, 2, 3, 16, 17, 18, 19, 20))
 
 
 class LightSurfaces:
@@ -395,11 +395,12 @@ class LightSurfaces:
         w = np.zeros((n, M))
         src = np.zeros((n, M), np.int64)
         if n:
-            _plan_kernels[n * max(1, len(self)) >= PARALLEL_MIN](
+            _plan_kernel(
                 np.ascontiguousarray(points, np.float64), np.ascontiguousarray(normals, np.float64),
                 np.ascontiguousarray(origins, np.float64), U, self.tri_vertices, self.tri_normals,
                 self.tri_area, self.tri_far2, self.tri_L, self._tri_Y, self.sph_centre, self.sph_radius,
-                self.sph_L, self._sph_Y, int(max(1, samples)), rim, E0, src, d, t, w)
+                self.sph_L, self._sph_Y, int(max(1, samples)), rim, E0, src, d, t, w,
+                         work=n * max(1, len(self)))
         return E0, d, t, w[:, :, None] * self.L[src]
 
     def illuminance(self, points, normals, origins, rng: np.random.Generator, samples: int,

@@ -10,9 +10,8 @@ paper's Eq. 5 interpolation uses them as first-order corrections.
 from __future__ import annotations
 
 import numpy as np
-import numba
 
-from .compiled import PARALLEL_MIN, in_threads, nogil_kernel
+from .compiled import RowKernel
 from .hemisphere import _tangents
 
 __all__ = ["MIN_GRADIENT_DISTANCE", "irradiance_gradients", "limit_gradients"]
@@ -84,12 +83,11 @@ def irradiance_gradients(normals: np.ndarray, directions: np.ndarray, radiance: 
     rot = np.zeros((r, C, 3))
     trans = np.zeros((r, C, 3))
     if r:
-        args = (np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions),
-                np.ascontiguousarray(radiance), np.ascontiguousarray(distances), rot, trans)
-        if r * distances.shape[1] * distances.shape[2] >= PARALLEL_MIN:     # records on threads
-            in_threads(r, numba.get_num_threads(), lambda lo, hi: _gradients_kernel(*(a[lo:hi] for a in args)))
-        else:
-            _gradients_kernel(*args)
+        # float64 throughout: one compiled specialisation (float32 inputs widen exactly,
+        # and the kernel's arithmetic is float64 either way)
+        _gradients_kernel(np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions, np.float64),
+                          np.ascontiguousarray(radiance, np.float64), np.ascontiguousarray(distances, np.float64),
+                          rot, trans, work=r * distances.shape[1] * distances.shape[2])
     return rot, trans
 
 
@@ -148,4 +146,4 @@ def _gradients(normals, directions, radiance, distances, rot, trans):
                     trans[i, ch, 2] += acc * uz
 
 
-_gradients_kernel = nogil_kernel(_gradients)
+_gradients_kernel = RowKernel(_gradients, rows=(0, 1, 2, 3, 4, 5))

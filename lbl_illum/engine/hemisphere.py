@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import RowKernel
 from ..scene.geometry import orthonormal_basis
 
 __all__ = ["orthonormal_basis", "cell_counts", "stratified_directions", "cosine_directions"]
@@ -61,7 +61,7 @@ def _stratified(normals, u, v, m, n, out):
                 out[i, c, 2] = x * tz + y * bz + cos_t * nz
 
 
-_stratified_kernels = serial_and_parallel(_stratified)
+_stratified_kernel = RowKernel(_stratified, rows=(0, 1, 2, 5))
 
 
 def stratified_directions(normals: np.ndarray, m: int, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -76,7 +76,7 @@ def stratified_directions(normals: np.ndarray, m: int, n: int, rng: np.random.Ge
     u = rng.random((r, m * n))
     v = rng.random((r, m * n))
     out = np.empty((r, m * n, 3))
-    _stratified_kernels[r * m * n >= PARALLEL_MIN](normals, u, v, m, n, out)
+    _stratified_kernel(normals, u, v, m, n, out, work=r * m * n)
     return out
 
 

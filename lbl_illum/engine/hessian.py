@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import RowKernel
 from .gradients import MIN_GRADIENT_DISTANCE
 from .hemisphere import _tangents
 from .lambert import lambert_edge
@@ -95,7 +95,7 @@ def _hessian(normals, directions, values, distances, far, out):
             out[i, c] = sign * acc[c]
 
 
-_hessian_kernels = serial_and_parallel(_hessian)
+_hessian_kernel = RowKernel(_hessian, rows=(0, 1, 2, 3, 5))
 
 
 def irradiance_hessian(normals: np.ndarray, directions: np.ndarray, values: np.ndarray,
@@ -127,9 +127,10 @@ def irradiance_hessian(normals: np.ndarray, directions: np.ndarray, values: np.n
     r = distances.shape[0]
     out = np.zeros((r, 6))
     if r:
-        kernel = _hessian_kernels[r * distances.shape[1] * distances.shape[2] >= PARALLEL_MIN // 4]
-        kernel(np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions, np.float64),
-               np.ascontiguousarray(values, np.float64), distances, float(far), out)
+        # a record costs about 4 rays' work per stratum: threads from PARALLEL_MIN / 4 strata
+        _hessian_kernel(np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions, np.float64),
+                        np.ascontiguousarray(values, np.float64), distances, float(far), out,
+                        work=4 * r * distances.shape[1] * distances.shape[2])
     return out
 
 
@@ -235,7 +236,7 @@ def _leaks(normals, directions, distances, reach_s, reach_l, axis, n_phi, out):
         out[i] = mask
 
 
-_leak_kernels = serial_and_parallel(_leaks)
+_leak_kernel = RowKernel(_leaks, rows=(0, 1, 2, 3, 4, 5, 7))
 
 
 def leak_sectors(normals, directions, distances, reach_short, reach_long, axis, n_phi) -> np.ndarray:
@@ -258,8 +259,7 @@ def leak_sectors(normals, directions, distances, reach_short, reach_long, axis, 
     r = distances.shape[0]
     out = np.zeros(r, np.uint32)
     if r:
-        _leak_kernels[r * distances.shape[1] >= PARALLEL_MIN](
-            np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions, np.float64), distances,
-            np.ascontiguousarray(reach_short, np.float64), np.ascontiguousarray(reach_long, np.float64),
-            np.ascontiguousarray(axis, np.float64), int(n_phi), out)
+        _leak_kernel(np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(directions, np.float64), distances,
+                     np.ascontiguousarray(reach_short, np.float64), np.ascontiguousarray(reach_long, np.float64),
+                     np.ascontiguousarray(axis, np.float64), int(n_phi), out, work=r * distances.shape[1])
     return out

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import RowKernel
 
 __all__ = ["lambert_edge", "portal_irradiance"]
 
@@ -153,7 +153,7 @@ def _portals(P, N, T, B, vertices, weight, outward, out):
             out[i, c] = total[c]
 
 
-_portal_kernels = serial_and_parallel(_portals)
+_portal_kernel = RowKernel(_portals, rows=(0, 1, 2, 3, 7))
 
 
 def portal_irradiance(points: np.ndarray, normals: np.ndarray, tangents, triangles: np.ndarray,
@@ -177,8 +177,8 @@ def portal_irradiance(points: np.ndarray, normals: np.ndarray, tangents, triangl
     out = np.zeros((r, 6))
     if r and len(triangles):
         t, b = tangents
-        _portal_kernels[r * len(triangles) >= PARALLEL_MIN](
+        _portal_kernel(
             points, np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(t, np.float64),
             np.ascontiguousarray(b, np.float64), np.ascontiguousarray(triangles, np.float64),
-            np.ascontiguousarray(luminance, np.float64), np.ascontiguousarray(outward, np.float64), out)
+            np.ascontiguousarray(luminance, np.float64), np.ascontiguousarray(outward, np.float64), out, work=r * len(triangles))
     return out

@@ -169,53 +169,29 @@ def _morton(px, py, pz, lo_x, lo_y, lo_z, scale, bits):
     return _spread3(cx) | (_spread3(cy) << np.uint64(1)) | (_spread3(cz) << np.uint64(2))
 
 
-@njit(cache=True)
-def _argsort_keys(keys):
-    """Stable argsort of uint64 keys (ties keep index order): least-significant-digit
-    radix sort on 16-bit digits, skipping digits all keys share."""
-    n = keys.shape[0]
-    if n < 32768:
-        return np.argsort(keys, kind="mergesort")
-    order = np.arange(n)
-    k_in = keys.copy()
-    k_out = np.empty(n, np.uint64)
-    o_out = np.empty(n, np.int64)
-    top = np.uint64(0)
-    for i in range(n):
-        top |= keys[i]
-    mask = np.uint64(0xFFFF)
-    shift = 0
-    while shift < 64 and (top >> np.uint64(shift)) != np.uint64(0):
-        s = np.uint64(shift)
-        count = np.zeros(65537, np.int64)
-        for i in range(n):
-            count[np.int64((k_in[i] >> s) & mask) + 1] += 1
-        if count.max() < n:                 # some keys differ in this digit
-            for d in range(65536):
-                count[d + 1] += count[d]
-            for i in range(n):
-                d = np.int64((k_in[i] >> s) & mask)
-                j = count[d]
-                count[d] = j + 1
-                k_out[j] = k_in[i]
-                o_out[j] = order[i]
-            k_in, k_out = k_out, k_in
-            order, o_out = o_out, order
-        shift += 16
-    return order
+def _stable_order(keys: np.ndarray) -> np.ndarray:
+    """Indices that sort ``keys`` with ties in index order (numpy's stable sort: done
+    outside the kernels, whose compiled sorts cost seconds of a first run's compilation)."""
+    return np.argsort(keys, kind="stable")
 
 
-@njit(cache=True)
-def query_order(qP, center, half):
+def query_order(qP, center, half) -> np.ndarray:
     """Order in which to visit queries: by the Morton code of their positions on a grid
-    of 2^QUERY_BITS cells per axis over the root cube (``center`` ± ``half`` [m])."""
+    of 2^QUERY_BITS cells per axis over the root cube (``center`` ± ``half`` [m]), ties
+    in index order."""
+    return _stable_order(_query_keys(qP, center, half))
+
+
+@njit(cache=True)
+def _query_keys(qP, center, half):
+    """The sort keys of :func:`query_order`."""
     n = qP.shape[0]
     keys = np.empty(n, np.uint64)
     scale = (1 << QUERY_BITS) / (2.0 * half)
     for q in range(n):
         keys[q] = _morton(qP[q, 0], qP[q, 1], qP[q, 2], center[0] - half, center[1] - half, center[2] - half,
                           scale, QUERY_BITS)
-    return _argsort_keys(keys)
+    return keys
 
 
 # -- freezing -----------------------------------------------------------------------------------
@@ -236,10 +212,10 @@ def _outward(lo, hi, box, g, t):
 
 
 @njit(cache=True)
-def _record_order(count, n_nodes, rec_node, node_child, node_center, node_half, P):
-    """Layout order of records ``0:count``: by the depth-first index of their node (octant
-    0 first, a node before its children), then by the Morton code of P_i on the finest
-    grid over the node's cube that fits a 63-bit key, then by record index."""
+def _record_keys(count, n_nodes, rec_node, node_child, node_center, node_half, P):
+    """Sort keys of the layout order of records ``0:count`` (ties go by record index): the
+    depth-first index of their node (octant 0 first, a node before its children), then
+    the Morton code of P_i on the finest grid over the node's cube that fits a 63-bit key."""
     m = n_nodes
     dfs_of = np.empty(m, np.int64)
     stack = np.empty(8 * (MAX_DEPTH + 2), np.int32)
@@ -267,14 +243,13 @@ def _record_order(count, n_nodes, rec_node, node_child, node_center, node_half, 
         keys[i] = (np.uint64(dfs_of[nd]) << np.uint64(3 * bits)) | _morton(
             P[i, 0], P[i, 1], P[i, 2], node_center[nd, 0] - h, node_center[nd, 1] - h, node_center[nd, 2] - h,
             (1 << bits) / (2.0 * h), bits)
-    return _argsort_keys(keys)
+    return keys
 
 
-@njit(cache=True)
-def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R, zone, accuracy):
+def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R, zone, accuracy) -> tuple:
     """Lay records ``0:count`` out for lookups; return the fields of :class:`Layout`.
 
-    Records go in :func:`_record_order`, in chunks of LANES (the last one padded with
+    Records go in the order of :func:`_record_keys`, in chunks of LANES (the last one padded with
     NaN positions, which no test accepts).  Boxes: at level 0 each chunk's box around
     its records' domains P_i ± a R_i (1 + BOX_MARGIN), at level l + 1 the union of
     each LANES consecutive boxes of level l, up to one box (at least two levels).
@@ -282,7 +257,16 @@ def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R
     (lo = +inf, hi = -inf): the children of box k of level l + 1 are group
     ``level_start[l] + k``.
     """
-    order = _record_order(count, n_nodes, rec_node, node_child, node_center, node_half, P)
+    order = _stable_order(_record_keys(count, n_nodes, rec_node, node_child, node_center, node_half, P))
+    perm, pos, nr, box, level_start, sides = _layout(order, count, P, N, R, zone, accuracy)
+    extent = PACKET_SCALE * float(np.median(sides)) if len(sides) else 0.0
+    return perm, pos, nr, box, level_start, extent
+
+
+@njit(cache=True)
+def _layout(order, count, P, N, R, zone, accuracy):
+    """The arrays of :func:`freeze` for records in ``order``, and the largest side [m] of
+    each level-1 box."""
     n_chunks = (count + LANES - 1) // LANES
     n_pad = n_chunks * LANES
     perm = np.zeros(n_pad, np.int32)
@@ -341,8 +325,7 @@ def freeze(count, n_nodes, rec_node, node_child, node_center, node_half, P, N, R
         g = level_start[1] + k // LANES
         t = k % LANES
         sides[k] = max(box[g, 3, t] - box[g, 0, t], box[g, 4, t] - box[g, 1, t], box[g, 5, t] - box[g, 2, t])
-    extent = PACKET_SCALE * np.median(sides) if level_count[1] > 0 else 0.0
-    return perm, pos, nr, box, level_start, extent
+    return perm, pos, nr, box, level_start, sides
 
 
 # -- lookup ------------------------------------------------------------------------------------

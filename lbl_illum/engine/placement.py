@@ -14,32 +14,31 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import RowKernel
 
 __all__ = ["distance_bands", "pick_per_cell"]
 
 _HASH = (np.int64(73856093), np.int64(19349663), np.int64(83492791))
 
 
-def _distance_bands(P, lo, hi, max_spacing):
-    """(n,) int64: ⌈log2(1 + δ / max_spacing)⌉, δ the distance from P to the box [lo, hi]."""
-    n = P.shape[0]
-    out = np.empty(n, np.int64)
-    for q in prange(n):
+def _distance_bands(P, lo, hi, max_spacing, out):
+    """Compiled body of :func:`distance_bands`."""
+    for q in prange(P.shape[0]):
         d2 = 0.0
         for c in range(3):
             e = max(0.0, max(lo[c] - P[q, c], P[q, c] - hi[c]))
             d2 += e * e
         out[q] = np.int64(np.ceil(np.log2(1.0 + np.sqrt(d2) / max_spacing)))
-    return out
 
 
-_distance_bands_kernels = serial_and_parallel(_distance_bands)
+_distance_bands_kernel = RowKernel(_distance_bands, rows=(0, 4))
 
 
 def distance_bands(P, lo, hi, max_spacing):
     """(n,) int64: ⌈log2(1 + δ / max_spacing)⌉, δ the distance from P to the box [lo, hi]."""
-    return _distance_bands_kernels[len(P) >= PARALLEL_MIN](P, lo, hi, max_spacing)
+    out = np.empty(len(P), np.int64)
+    _distance_bands_kernel(P, lo, hi, max_spacing, out)
+    return out
 
 
 def _cell_keys(P, N, band, cell, key, off_centre):
@@ -64,14 +63,13 @@ def _cell_keys(P, N, band, cell, key, off_centre):
         off_centre[q] = off
 
 
-_cell_keys_kernels = serial_and_parallel(_cell_keys)
+_cell_keys_kernel = RowKernel(_cell_keys, rows=(0, 1, 2, 4, 5))
 
 
 @njit(cache=True)
 def _nearest_per_key(key, off_centre):
     """For each distinct key, the query nearest its cell's centre (the lowest index among
-    ties); returned in ascending key order.  One pass through an open-addressing hash
-    table, then a sort of the distinct keys only."""
+    ties), and the distinct keys.  One pass through an open-addressing hash table."""
     n = key.shape[0]
     size = 16
     while size < 2 * n:
@@ -103,7 +101,7 @@ def _nearest_per_key(key, off_centre):
             keys[m] = slot_key[s]
             best[m] = slot_best[s]
             m += 1
-    return best[np.argsort(keys)]
+    return best, keys
 
 
 def pick_per_cell(P: np.ndarray, N: np.ndarray, band: np.ndarray, cell: float) -> np.ndarray:
@@ -116,6 +114,6 @@ def pick_per_cell(P: np.ndarray, N: np.ndarray, band: np.ndarray, cell: float) -
     n = len(P)
     key = np.empty(n, np.int64)
     off_centre = np.empty(n, np.float64)
-    kernel = _cell_keys_kernels[n >= PARALLEL_MIN]
-    kernel(np.ascontiguousarray(P), np.ascontiguousarray(N), band, float(cell), key, off_centre)
-    return _nearest_per_key(key, off_centre)
+    _cell_keys_kernel(np.ascontiguousarray(P), np.ascontiguousarray(N), band, float(cell), key, off_centre)
+    best, keys = _nearest_per_key(key, off_centre)
+    return best[np.argsort(keys)]                # distinct keys: any sort gives this order

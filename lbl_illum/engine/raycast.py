@@ -32,7 +32,7 @@ from numba import prange
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
-from .compiled import PARALLEL_MIN, serial_and_parallel
+from .compiled import RowKernel
 from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
 from ..scene.geometry import orthonormal_basis
 from ..scene.materials import GLASS
@@ -88,7 +88,7 @@ def _plane_hits_kernel(o, d, t, prim, index, normals, v0, p, ng):
         ng[q, 2] = nz
 
 
-_plane_hits = serial_and_parallel(_plane_hits_kernel)
+_plane_hits = RowKernel(_plane_hits_kernel, rows=(4, 7, 8))
 
 
 def step_past(origins: np.ndarray, directions: np.ndarray, t: np.ndarray, length_scale: float):
@@ -381,9 +381,8 @@ class Tracer:
         index = np.asarray(index, np.int64)
         p = np.empty((len(index), 3))
         ng = np.empty((len(index), 3))
-        _plane_hits[len(index) >= PARALLEL_MIN](np.ascontiguousarray(origins, np.float64),
-                                                np.ascontiguousarray(directions, np.float64),
-                                                hits.t, hits.prim, index, self.normals, self._v0, p, ng)
+        _plane_hits(np.ascontiguousarray(origins, np.float64), np.ascontiguousarray(directions, np.float64),
+                    hits.t, hits.prim, index, self.normals, self._v0, p, ng)
         ns = ng.copy()
         if not self._has_spheres:
             return p, ng, ns

@@ -71,7 +71,7 @@ def test_kernels_on_disk_reads_numba_index_files(monkeypatch, tmp_path):
     monkeypatch.setattr(index, "_index_path", str(tmp_path / "missing.nbi"))
     assert compiled.kernels_on_disk() is False
     (tmp_path / "missing.nbi").write_bytes(b"")
-    others = (octree._covered_kernel, octree.freeze, hemisphere._stratified_kernels[0])
+    others = (octree._covered_kernel, octree._layout, hemisphere._stratified_kernel.kernel)
     assert compiled.kernels_on_disk() is all(os.path.exists(k._cache._cache_file._index_path) for k in others)
 
 

@@ -270,8 +270,8 @@ def numba_kernels() -> set:
         if not (name == "lbl_illum" or name.startswith("lbl_illum.")) or module is None:
             continue
         for value in vars(module).values():
-            # kernels compiled serial and parallel are kept as a pair (compiled.py)
-            for obj in (value if isinstance(value, tuple) else (value,)):
+            # a RowKernel (compiled.py) holds its dispatcher
+            for obj in (getattr(value, "kernel", value),):
                 if isinstance(obj, Dispatcher):
                     code = obj.py_func.__code__
                     found.add((code.co_filename, code.co_firstlineno))
