@@ -24,6 +24,7 @@ from ..scene.views import View, view_from_file, view_from_string, views_from_tab
 from .progress import ProgressBar as _Bar, compile_notice
 from ..workplane.metrics import readable
 from .shared import run_options
+from ..viz.falsecolor import SCALES, STYLES
 
 __all__ = ["add_render_arguments", "render_command", "resolve_view", "scene_views", "check_image_size",
            "MAX_IMAGE_SIDE"]
@@ -108,9 +109,16 @@ def add_render_arguments(parser) -> None:
     o.add_argument("--preview", metavar="PNG", help="tone-mapped sRGB preview (Reinhard et al. 2002)")
     o.add_argument("--falsecolor", metavar="PNG", help="false-colour luminance with a legend in cd/m2")
     o.add_argument("--falsecolor-max", type=float, metavar="L", help="top of the false-colour scale [cd/m2] "
-                   "(default: a round number above the 99th percentile)")
-    o.add_argument("--falsecolor-scale", choices=("linear", "log"), default="linear",
-                   help="false-colour bands: equal steps (linear, default) or equal ratios (log)")
+                   "(default: a round number at or above the 99th percentile of the room's pixels, those that "
+                   "do not see the sky, the sun or a lamp directly)")
+    o.add_argument("--falsecolor-scale", choices=SCALES, default="linear",
+                   help="false-colour bands at round numbers: steps of luminance (linear, default) or of ratio "
+                        "(log: 2 decades, 1-2-5)")
+    o.add_argument("--falsecolor-style", choices=STYLES, default="bands",
+                   help="fill the bands (default), or draw their edges as contour lines in the bands' colours "
+                        "over a grey picture (as falsecolor -cl)")
+    o.add_argument("--falsecolor-title", metavar="TEXT",
+                   help="the false-colour picture's title, wrapped to its width (default: the scene file)")
     from .cache import add_cache_file_arguments
 
     add_cache_file_arguments(o)
@@ -196,6 +204,11 @@ def _check_outputs(args) -> None:
             check_image_path(png, (".png",))
     if _arg(args, "falsecolor"):
         check_optional("matplotlib", f"--falsecolor {Path(args.falsecolor).name}")
+    elif (_arg(args, "falsecolor_max") is not None or _arg(args, "falsecolor_title") is not None
+          or (_arg(args, "falsecolor_scale") or "linear") != "linear"
+          or (_arg(args, "falsecolor_style") or "bands") != "bands"):
+        raise InputError("--falsecolor-max, --falsecolor-scale, --falsecolor-style and --falsecolor-title "
+                         "go with --falsecolor PNG")
     for extra in (_arg(args, "cache"), _arg(args, "stats")):
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
@@ -260,8 +273,9 @@ def render_command(args, progress=None) -> int:
         from ..viz.falsecolor import write_falsecolor
 
         write_falsecolor(args.falsecolor, result.rgb, maximum=_arg(args, "falsecolor_max"),
-                         scale=_arg(args, "falsecolor_scale", "linear") or "linear", valid=result.valid,
-                         title=f"{Path(args.scene).name}: luminance")
+                         scale=_arg(args, "falsecolor_scale") or "linear",
+                         style=_arg(args, "falsecolor_style") or "bands", valid=result.valid, source=result.source,
+                         title=_arg(args, "falsecolor_title") or f"{Path(args.scene).name}: luminance")
     seconds = time.perf_counter() - t0
     stats = result.stats
     if _arg(args, "stats"):

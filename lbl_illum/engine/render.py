@@ -78,6 +78,16 @@ so the sun is counted once; after any further reflection it counts again, as no 
 ray covered that path.  Light surfaces met by the continued ray count (unbiased; Radiance
 takes them by shadow rays as well and discards them in its specular samples).
 
+**Light sources seen directly.**  Beside the pixels the result marks the *source*
+pixels (:func:`first_hit_sources`): those where a camera ray's first hit is not an
+ordinary surface of the scene but light arriving from a source — the ray escapes (sky,
+ground glow, sun disk; through an unglazed ``opening`` too), meets ``glass`` (a window:
+what the pixel shows lies beyond it), a ``translucent`` window (a portal), a ``light``
+surface or a luminaire's opening.  Diffuse, plastic and mirror surfaces are the room's
+own.  False colour sets its default scale from the other pixels (the room, not the
+window; :func:`lbl_illum.viz.falsecolor.default_maximum`).  Finding them costs one
+closest-hit query per camera ray, counted in ``stats.rays``.
+
 Units: lengths [m], luminance [cd/m²], illuminance [lux]; pixels are linear RGB with
 photometric channels (DESIGN.md §2), row 0 the top of the image (:mod:`lbl_illum.scene.views`).
 """
@@ -91,16 +101,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cache import IrradianceCache
+from .context import LightingContext
 from ..errors import InputError
 from .integrator import Integrator
 from .paths import CAMERA, WEIGHT_LIMIT, follow_paths
 from ..options import Options
 from ..photometry import luminance
+from ..scene.materials import GLASS, LIGHT
 from ..scene.scenefile import Scene
 from ..scene.views import View
 
-__all__ = ["RenderResult", "RenderStats", "render_image", "trace_view_paths", "image_options", "view_spacing",
-           "WEIGHT_LIMIT"]
+__all__ = ["RenderResult", "RenderStats", "render_image", "trace_view_paths", "first_hit_sources", "image_options",
+           "view_spacing", "WEIGHT_LIMIT"]
 
 #: Percentiles of the diffuse hits' coordinates whose box sets an image's record spacing.
 SPACING_PERCENTILES = (5.0, 95.0)
@@ -156,6 +168,10 @@ class RenderResult:
         where ``rgb`` is 0)
     view, stats, options : what was rendered, how, with what settings
     cache : the irradiance cache after the render (pass it on to share its records)
+    source : (h, w) bool — pixels where at least one camera ray's first hit is a light
+        source seen directly (:func:`first_hit_sources`: sky, sun, glass, a translucent
+        window, a light surface, a luminaire's opening); ``valid & ~source`` are the
+        pixels that show the room's own surfaces.  None: not known (all count as the room)
     """
 
     rgb: np.ndarray
@@ -164,6 +180,7 @@ class RenderResult:
     stats: RenderStats
     options: Options
     cache: IrradianceCache | None = None
+    source: np.ndarray | None = None
 
     @property
     def luminance(self) -> np.ndarray:
@@ -243,6 +260,35 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
     return paths.radiance, {"ray": paths.ray, "P": paths.P, "N": paths.Ns, "weight": paths.weight}, paths.rays
 
 
+def first_hit_sources(context: LightingContext, origins: np.ndarray, directions: np.ndarray,
+                      tmax: np.ndarray | None = None) -> np.ndarray:
+    """(n,) bool: the camera rays whose first hit is a light source seen directly.
+
+    A ray sees a source when it escapes (the sky, the ground glow or the sun's disk,
+    through an unglazed opening too), or its first hit is ``glass`` (a window), a
+    ``translucent`` window (a portal, :mod:`lbl_illum.engine.portals`), a ``light``
+    surface, or a luminaire's opening met before the scene's hit — the ends and the
+    glass of :func:`lbl_illum.engine.paths.follow_paths`' first depth.  A diffuse,
+    plastic or mirror surface is not a source; nor is a ray that ``tmax`` (n,) [m]
+    clips (it sees nothing).  One closest-hit query per ray (``origins`` [m],
+    unit ``directions``).
+    """
+    tracer = context.tracer
+    o, d = np.asarray(origins, np.float64), np.asarray(directions, np.float64)
+    hits = tracer.intersect(o, d)
+    clip = np.full(len(o), np.inf) if tmax is None else np.asarray(tmax, np.float64)
+    reached = np.flatnonzero(hits.hit & (hits.t <= clip))
+    source = ~hits.hit & ~np.isfinite(clip)
+    prim = hits.prim[reached]
+    kind = context.materials.kind[context.scene.triangles.material[prim]]
+    source[reached] = (kind == GLASS) | (kind == LIGHT) | context.translucent_portal[prim]
+    luminous = context.luminous_openings
+    if luminous is not None:
+        seen, _ = luminous.seen(o, d, np.minimum(hits.t, clip), None, tracer.length_scale)
+        source[seen] = True
+    return source
+
+
 # ---------------------------------------------------------------------------
 # The image
 # ---------------------------------------------------------------------------
@@ -269,7 +315,8 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
 
     Returns
     -------
-    RenderResult with ``rgb`` (h, w, 3) float32 [cd/m²], ``valid`` (h, w), stats and the cache.
+    RenderResult with ``rgb`` (h, w, 3) float32 [cd/m²], ``valid`` (h, w), ``source`` (h, w)
+    (:func:`first_hit_sources`), stats and the cache.
     """
     t0 = time.perf_counter()
     for name, value in (("width", width), ("height", height), ("pixel_samples", pixel_samples)):
@@ -302,6 +349,8 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
     rng_paths = np.random.default_rng(np.random.SeedSequence([opts.seed, _TAG_PATHS]))
     known, hits, camera_rays = trace_view_paths(integ, origins[live], directions[live], rng_paths, tmax,
                                                 progress)
+    sees_source = np.zeros(len(valid), bool)
+    sees_source[live] = first_hit_sources(integ.context, origins[live], directions[live], tmax)
     stats.camera_rays = camera_rays
     stats.diffuse_hits = len(hits["ray"])
     t1 = time.perf_counter()
@@ -333,4 +382,5 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
     stats.seconds = time.perf_counter() - t0
     if progress is not None:
         progress.describe("done")
-    return RenderResult(rgb.astype(np.float32), count > 0, view, stats, opts, integ.cache)
+    source = sees_source.reshape(height, width, pixel_samples).any(axis=2)
+    return RenderResult(rgb.astype(np.float32), count > 0, view, stats, opts, integ.cache, source)

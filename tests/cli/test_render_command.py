@@ -82,7 +82,8 @@ bounces = 2
 def command_args(tmp_path, **changes):
     values = dict(scene=str(tmp_path / "room.toml"), view=ROOM_VIEW, view_file=None, x=32, y=32,
                   output=str(tmp_path / "out.hdr"), pixel_samples=1, preview=None, falsecolor=None,
-                  falsecolor_max=None, falsecolor_scale="linear", cache=None, stats=None, quiet=True)
+                  falsecolor_max=None, falsecolor_scale="linear", falsecolor_style="bands", falsecolor_title=None,
+                  cache=None, stats=None, quiet=True)
     values.update(changes)
     return argparse.Namespace(**values)
 
@@ -112,7 +113,9 @@ def test_render_command_refuses_bad_input_before_writing(tmp_path):
     (tmp_path / "room.toml").write_text(ROOM_TOML)
     bad = [dict(output=str(tmp_path / "out.jpg")), dict(view="nowhere"), dict(view=None),
            dict(view="-vtv -vh 200"), dict(preview=str(tmp_path / "p.jpg")), dict(x=0),
-           dict(point_samples=64), dict(cache=str(tmp_path / "no" / "c.npz"))]
+           dict(point_samples=64), dict(cache=str(tmp_path / "no" / "c.npz")),
+           dict(falsecolor_style="contours"), dict(falsecolor_title="Level 2"), dict(falsecolor_max=100.0),
+           dict(falsecolor=str(tmp_path / "f.png"), falsecolor_max=-1.0)]
     for change in bad:
         with pytest.raises(InputError) as info:
             render_command(command_args(tmp_path, **change))
@@ -138,3 +141,34 @@ def test_view_options_and_files_are_in_the_scene_units(tmp_path):
     vf = tmp_path / "v.vf"
     vf.write_text("rvu -vtv -vp 1000 2000 3000 -vd 0 1 0\n")
     assert np.allclose(resolve_view(scene, None, str(vf)).position, [1.0, 2.0, 3.0])
+
+
+def test_falsecolor_gets_the_source_pixels_the_style_and_the_title(tmp_path, monkeypatch):
+    """The lamp seen in the ceiling (2,000 cd/m²) is the only source: the false colour gets
+    the render's source pixels (its default scale is the walls'), the style and the title
+    asked for; without --falsecolor-title the scene file names the picture."""
+    pytest.importorskip("matplotlib")
+    from lbl_illum.viz import falsecolor
+
+    calls = []
+    real = falsecolor.write_falsecolor
+
+    def spy(path, image, **kwargs):
+        calls.append(kwargs)
+        return real(path, image, **kwargs)
+
+    monkeypatch.setattr(falsecolor, "write_falsecolor", spy)
+    (tmp_path / "room.toml").write_text(ROOM_TOML)
+    title = "Room 1, lamp on, no daylight: luminance seen from the door"
+    args = command_args(tmp_path, falsecolor=str(tmp_path / "f.png"), falsecolor_style="contours",
+                        falsecolor_title=title)
+    assert render_command(args) == 0
+    lum = read_image(tmp_path / "out.hdr").luminance
+    (kwargs,) = calls
+    assert kwargs["style"] == "contours" and kwargs["title"] == title and kwargs["maximum"] is None
+    lamp = lum > 1000.0
+    assert lamp.any() and np.array_equal(kwargs["source"], lamp)
+    assert falsecolor.default_maximum(lum, kwargs["valid"], kwargs["source"]) < 1000.0
+    assert (tmp_path / "f.png").stat().st_size > 0
+    assert render_command(command_args(tmp_path, falsecolor=str(tmp_path / "g.png"))) == 0
+    assert calls[-1]["title"] == "room.toml: luminance" and calls[-1]["style"] == "bands"

@@ -32,11 +32,13 @@ import pytest
 from lbl_illum import Options
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.scene.materials import plastic_fresnel, thin_pane_reflectance, ward_brdf
-from lbl_illum.engine.render import WEIGHT_LIMIT, image_options, render_image, trace_view_paths, view_spacing
+from lbl_illum.engine.render import (WEIGHT_LIMIT, first_hit_sources, image_options, render_image, trace_view_paths,
+                                     view_spacing)
 from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
+from lbl_illum.scene.scenefile import scene_from_dict
 from lbl_illum.scene.views import View, view_from_string
 
-from conftest import make_scene
+from conftest import ies_text, make_scene
 
 E_H = 10000.0          # sky's horizontal illuminance [lux]
 E_DN = 50000.0         # sun's direct normal illuminance [lux]
@@ -407,6 +409,86 @@ def test_view_spacing_ignores_far_outliers():
     assert hi == pytest.approx(lo * 16)
     assert 2.5 < hi < 4.5                                        # D/2 of the room's 7.8 m diagonal, trimmed
     assert view_spacing(np.zeros((5, 3))) is None
+
+
+# -- light sources seen directly (the false colour's default scale) -----------------------
+
+def rect(origin, u, v, material):
+    return {"shape": "rectangle", "origin": origin, "u": u, "v": v, "material": material}
+
+
+#: The south wall's openings and panels at y = -2 (x from, x to, z from, z to) [m].
+GLAZED, HOLE, PANEL, MIRROR = (-1.6, -0.4, 1.0, 2.0), (0.4, 1.6, 1.0, 2.0), (-1.6, -0.4, 0.2, 0.8), (0.4, 1.6, 0.2, 0.8)
+
+
+def windowed_room(tmp_path):
+    """A 4 × 4 × 3 m room (x, y from -2 to 2) under a uniform sky: in its south wall a
+    glazed window and an unglazed hole (both x 1.2 m × z 1 m), below them a light panel and
+    a mirror 2 cm in front of the wall, and a luminaire (a 0.6 m × 0.4 m opening) at the
+    ceiling's centre."""
+    (tmp_path / "lum.ies").write_text(ies_text(lambda v, h: np.full(np.shape(v), 500.0), np.array([0.0]),
+                                               dims=(0.6, 0.4, 0.0)))
+    geo = [rect([-2, -2, 0], [4, 0, 0], [0, 4, 0], "wall"), rect([-2, -2, 3], [4, 0, 0], [0, 4, 0], "wall"),
+           rect([-2, 2, 0], [4, 0, 0], [0, 0, 3], "wall"), rect([-2, -2, 0], [0, 4, 0], [0, 0, 3], "wall"),
+           rect([2, -2, 0], [0, 4, 0], [0, 0, 3], "wall"),
+           # the south wall around the two openings
+           rect([-2, -2, 0], [4, 0, 0], [0, 0, 1], "wall"), rect([-2, -2, 2], [4, 0, 0], [0, 0, 1], "wall"),
+           rect([-2, -2, 1], [0.4, 0, 0], [0, 0, 1], "wall"), rect([-0.4, -2, 1], [0.8, 0, 0], [0, 0, 1], "wall"),
+           rect([1.6, -2, 1], [0.4, 0, 0], [0, 0, 1], "wall"),
+           rect([-1.6, -2, 1], [1.2, 0, 0], [0, 0, 1], "glass"),
+           rect([-1.6, -1.98, 0.2], [1.2, 0, 0], [0, 0, 0.6], "lamp"),
+           rect([0.4, -1.98, 0.2], [1.2, 0, 0], [0, 0, 0.6], "mirror")]
+    mats = {"wall": {"type": "diffuse", "reflectance": 0.5}, "mirror": {"type": "mirror", "reflectance": 0.9},
+            "glass": {"type": "glass", "transmittance": 0.7, "model": "constant"},
+            "lamp": {"type": "light", "luminance": 2000.0}}
+    data = {"units": "m", "geometry": geo, "materials": mats, "sky": uniform_sky(),
+            "luminaires": [{"file": "lum.ies", "position": [0.0, 0.0, 2.9]}]}
+    return scene_from_dict(data, tmp_path, "test.toml")
+
+
+def inside(x, z, box, margin):
+    return (box[0] + margin < x) & (x < box[1] - margin) & (box[2] + margin < z) & (z < box[3] - margin)
+
+
+def test_source_pixels_are_the_window_the_hole_and_the_lamp_not_the_walls(tmp_path):
+    """A parallel view of the south wall, 0.1 m pixels: every pixel wholly inside the glazed
+    window, the hole or the light panel is a source pixel; every one wholly on the walls
+    or on the mirror (which shows the room behind the camera) is not."""
+    scene = windowed_room(tmp_path)
+    view = view_from_string("-vtl -vp 0 1.5 1.5 -vd 0 -1 0 -vu 0 0 1 -vh 4 -vv 3")
+    result = render_image(scene, view, 40, 30, QUICK, pixel_samples=2)
+    assert result.source.shape == result.valid.shape == (30, 40) and result.source.dtype == bool
+    o, d, _ = view.rays(40, 30)                                  # pixel centres, row 0 on top
+    x, z = (o[:, 0] + d[:, 0] * (o[:, 1] + 2) / -d[:, 1]).reshape(30, 40), o[:, 2].reshape(30, 40)
+    margin = 0.06                                                # over half a pixel: the whole pixel
+    sources = [inside(x, z, box, margin) for box in (GLAZED, HOLE, PANEL)]
+    mirror = inside(x, z, MIRROR, margin)
+    wall = ~np.any([inside(x, z, box, -margin) for box in (GLAZED, HOLE, PANEL, MIRROR)], axis=0)
+    for part in sources:
+        assert part.sum() >= 30 and result.source[part].all()
+    assert mirror.sum() >= 30 and not result.source[mirror].any()
+    assert wall.sum() >= 400 and not result.source[wall].any()
+    # the sky through the window is far brighter than the room: the false colour's default
+    # scale comes from the room
+    lum = result.luminance
+    assert lum[sources[0]].min() > 5 * np.percentile(lum[wall], 99)
+
+
+def test_first_hit_sources_along_given_rays(tmp_path):
+    """From the room's centre: the luminaire's opening, the window, the hole and the panel
+    are sources; the ceiling beside the luminaire, the mirror and the floor are not, nor
+    is the window beyond the aft clipping distance."""
+    integ = Integrator(windowed_room(tmp_path), QUICK)
+    centre = np.array([0.0, 0.0, 1.5])
+    targets = np.array([[0.0, 0.0, 2.9], [1.0, 1.0, 3.0], [-1.0, -2.0, 1.5], [1.0, -2.0, 1.5], [-1.0, -1.98, 0.5],
+                        [1.0, -1.98, 0.5], [0.5, 0.5, 0.0], [-1.0, -2.0, 1.5]])
+    d = targets - centre
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = np.tile(centre, (len(d), 1))
+    tmax = np.r_[np.full(7, np.inf), 1.0]
+    np.testing.assert_array_equal(first_hit_sources(integ.context, o, d, tmax),
+                                  [True, False, True, True, True, False, False, False])
+    assert first_hit_sources(integ.context, o[:1], d[:1])[0]
 
 
 # -- the paper's Figure 5 (validation/studies/figure5.py, quick version) ---------------
