@@ -2,9 +2,14 @@
 
 A plan shows, seen from above with x east and y north in metres:
 
-* the values at the points as false colour, interpolated linearly over a triangulation
-  of each area's points (triangles much longer than the grid's own cells are left
-  out, so colour does not bridge a notch of an L-shaped room or a column);
+* the values as false colour over the room's floor out to the walls: the rooms are the
+  closed regions of the outline that hold points (:func:`_plan_rooms`); inside a
+  triangulation of each area's points the values are interpolated linearly (triangles
+  much longer than the grid's own cells are left out), between the outer points and the
+  walls each spot takes the value of the nearest point in its room (:func:`_plan_field`).
+  Colour does not enter a notch of an L-shaped room, a column or furniture cut at the
+  grid height.  Where the outline does not close around the points (no outline, gaps in
+  the walls' section), colour stops at the points' triangulation;
 * isolines at round values, and dashed isolines at the thresholds;
 * the room's outline (the section of the walls at the grid height, from
   :func:`lbl_illum.workplane.grid.plan_outline`) and the windows;
@@ -75,6 +80,177 @@ def _masked_triangulation(xy: np.ndarray):
     return tri
 
 
+#: Gaps in the walls' section narrower than this [m] are closed when the rooms are found
+#: (section segments of adjacent triangles that miss each other, a window frame's inset).
+WALL_GAP = 0.05
+#: Cells of the colour raster along the longer side of the rooms' extent.
+RASTER_CELLS = 400
+#: Colour reaches at most this many grid spacings (the median distance between a point and
+#: its nearest neighbour), and at least ``REACH_MIN`` [m], from the nearest point of its room
+#: (a room corner behind a 1 m wall margin is 1.41 m away): a grid over part of a room (a
+#: task area), or rooms without points beyond a door opening, are not coloured throughout.
+REACH_SPACINGS = 2.0
+REACH_MIN = 1.5
+
+
+def _inside(rooms: list, xy: np.ndarray) -> np.ndarray:
+    """(n,) index of the first room holding each of the (n, 2) positions [m], -1 for none."""
+    import shapely
+
+    room = np.full(len(xy), -1)
+    for k, polygon in enumerate(rooms):
+        room[(room < 0) & shapely.contains_xy(polygon, xy[:, 0], xy[:, 1])] = k
+    return room
+
+
+def _plan_rooms(xy: np.ndarray, walls: np.ndarray, glazing: np.ndarray) -> list:
+    """The rooms of a plan: shapely polygons [m] of the closed regions of the outline that
+    hold some of the (n, 2) points ``xy`` [m].
+
+    walls, glazing : (k, 2, 2) plan segments [m].  Every segment, widened by
+    ``WALL_GAP / 2`` on each side (gaps narrower than ``WALL_GAP`` close), cuts the plane;
+    a region that holds points and does not reach the border of a box 1 m around all of
+    it is a room, grown back by ``WALL_GAP / 2`` to the segments' lines.  Holes of a room
+    (a column, furniture cut at the grid height) stay out of it, except a hole bounded by
+    glazing alone (a roof light seen from above).  Rooms are kept apart even when a single
+    wall line parts them.  Empty when no point lies in a closed region: no outline, or an
+    outline with gaps (a door opening to the outside, a missing wall).
+    """
+    import shapely
+
+    walls, glazing = (s[np.isfinite(s).all(axis=(1, 2))] for s in (walls.reshape(-1, 2, 2), glazing.reshape(-1, 2, 2)))
+    segments = np.concatenate([walls, glazing])
+    if len(segments) == 0 or len(xy) == 0:
+        return []
+    half = 0.5 * WALL_GAP
+    ends = np.concatenate([segments.reshape(-1, 2), xy])
+    box = shapely.box(*(ends.min(axis=0) - 1.0), *(ends.max(axis=0) + 1.0))
+    rooms = []
+    try:
+        solid = shapely.union_all(shapely.buffer(shapely.linestrings(segments), half))
+        glass = shapely.buffer(shapely.union_all(shapely.linestrings(glazing)), WALL_GAP) if len(glazing) else None
+        for region in shapely.get_parts(shapely.difference(box, solid)):
+            if region.intersects(box.exterior) or not shapely.contains_xy(region, xy[:, 0], xy[:, 1]).any():
+                continue
+            for room in shapely.get_parts(shapely.buffer(region, half, join_style="mitre")):
+                holes = [ring for ring in room.interiors if glass is None or not glass.covers(ring)]
+                rooms.append(shapely.Polygon(room.exterior, holes))
+    except shapely.errors.GEOSException:        # a degenerate outline: the plan colours as without one
+        return []
+    # a region under a roof light holding points lies in the room whose hole it filled
+    return [room for room in rooms
+            if not any(other is not room and other.contains(room.representative_point()) for other in rooms)]
+
+
+def _plan_field(xy: np.ndarray, values: np.ndarray, names: np.ndarray, rooms: list,
+                lo: np.ndarray, hi: np.ndarray, cells: int = RASTER_CELLS):
+    """The values on a raster over the rooms: ``(field, extent, own)``.
+
+    xy : (n, 2) points [m];  values : (n,) in the plan's unit;  names : (n,) area names;
+    rooms : polygons from :func:`_plan_rooms`;  lo, hi : (2,) corners [m] the raster stays
+    within;  cells : raster cells along the longer side.  field : (ny, nx) masked array of
+    values, row 0 to the south, square cells;  extent : (x0, x1, y0, y1) [m] of the raster;
+    own : (n,) room index of each point, -1 outside every room.
+
+    A cell whose centre lies in a room takes the linear interpolation of its area's values
+    over the area's triangulation where a triangle with all three corners in the same room
+    covers it; elsewhere (between the outer points and the walls, around a column) the value
+    at the nearest point of the triangulation's outer edges in its room — linear along the
+    edge, constant straight out from it: no gradient is invented beyond the points, and the
+    margin shades along the wall as the outer row of points does instead of stepping from
+    one point's value to the next (where an area has no such edge, a single row of points,
+    the nearest point's value).  A cell belongs to the area of its nearest point.  Cells
+    outside every room, in its holes, or farther than max(``REACH_MIN``, ``REACH_SPACINGS`` ×
+    grid spacing) from every point of their room are masked.
+    """
+    import shapely
+    from matplotlib.tri import LinearTriInterpolator
+
+    own = _inside(rooms, xy)
+    bounds = shapely.total_bounds(rooms)
+    r_lo, r_hi = np.maximum(bounds[:2], lo), np.minimum(bounds[2:], hi)
+    step = max(float((r_hi - r_lo).max()), 1e-6) / cells
+    n = np.maximum(np.ceil((r_hi - r_lo) / step).astype(int), 1)
+    cx, cy = np.meshgrid(r_lo[0] + (np.arange(n[0]) + 0.5) * step, r_lo[1] + (np.arange(n[1]) + 0.5) * step)
+    centres = np.column_stack([cx.ravel(), cy.ravel()])
+    cell_room = _inside(rooms, centres)
+    placed = np.flatnonzero(own >= 0)
+    spacing = 0.0
+    if len(placed) > 1:
+        tree = shapely.STRtree(shapely.points(xy[placed]))
+        _, gaps = tree.query_nearest(shapely.points(xy[placed]), return_distance=True, exclusive=True,
+                                     all_matches=False)
+        spacing = float(np.median(gaps)) if len(gaps) else 0.0
+    reach = max(REACH_MIN, REACH_SPACINGS * spacing)
+    near = np.full(len(centres), -1)
+    for k in range(len(rooms)):
+        mine, inside = np.flatnonzero(own == k), np.flatnonzero(cell_room == k)
+        if len(mine) == 0 or len(inside) == 0:
+            continue
+        (cell, point), dist = shapely.STRtree(shapely.points(xy[mine])).query_nearest(
+            shapely.points(centres[inside]), return_distance=True, all_matches=False)
+        ok = dist <= reach
+        near[inside[cell[ok]]] = mine[point[ok]]
+    hit = np.flatnonzero(near >= 0)
+    field = np.full(len(centres), np.nan)
+    field[hit] = values[near[hit]]
+    for name in dict.fromkeys(names[placed].tolist()):
+        sel = np.flatnonzero(names == name)
+        tri = _masked_triangulation(xy[sel])
+        if tri is None:
+            continue
+        mine = hit[names[near[hit]] == name]
+        t = tri.get_trifinder()(centres[mine, 0], centres[mine, 1])
+        corners = own[sel][tri.triangles[t]]
+        outside = mine[~((t >= 0) & (corners == cell_room[mine][:, None]).all(axis=1))]
+        mine = mine[(t >= 0) & (corners == cell_room[mine][:, None]).all(axis=1)]
+        linear = np.ma.filled(LinearTriInterpolator(tri, values[sel])(centres[mine, 0], centres[mine, 1]), np.nan)
+        field[mine[np.isfinite(linear)]] = linear[np.isfinite(linear)]
+        _extend_from_edges(field, centres, cell_room, outside, tri, values[sel], own[sel])
+    extent = (r_lo[0], r_lo[0] + n[0] * step, r_lo[1], r_lo[1] + n[1] * step)
+    return np.ma.masked_invalid(field.reshape(n[1], n[0])), extent, own
+
+
+def _outer_edges(tri, own) -> np.ndarray:
+    """(k, 2) point indices of the edges that border only one of the triangles used for
+    colour (unmasked, all three corners in one room, ``own`` (n,) the room of each
+    point): the outline of each room's triangulation, notches and holes included."""
+    keep = ~tri.mask if tri.mask is not None else np.ones(len(tri.triangles), bool)
+    t = tri.triangles[keep]
+    t = t[(own[t] == own[t[:, :1]]).all(axis=1)]
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    return unique[count == 1]
+
+
+def _extend_from_edges(field, centres, cell_room, cells, tri, values, own, chunk: int = 4096) -> None:
+    """field[cells] = the value at the nearest point of the triangulation's outer edges
+    whose two ends lie in the cell's room, linear along that edge (cells with no such
+    edge keep their value)."""
+    edges = _outer_edges(tri, own)
+    if len(edges) == 0 or len(cells) == 0:
+        return
+    xy = np.column_stack([tri.x, tri.y])
+    a, b = xy[edges[:, 0]], xy[edges[:, 1]]
+    ab = b - a
+    length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18)
+    room = own[edges[:, 0]]
+    for lo in range(0, len(cells), chunk):
+        c = cells[lo:lo + chunk]
+        p = centres[c]
+        t = np.clip(np.einsum("cej,ej->ce", p[:, None] - a[None], ab) / length2, 0.0, 1.0)
+        gap = p[:, None] - (a[None] + t[..., None] * ab[None])
+        d2 = np.einsum("cej,cej->ce", gap, gap)
+        d2[room[None] != cell_room[c][:, None]] = np.inf
+        best = np.argmin(d2, axis=1)
+        rows = np.arange(len(c))
+        ok = np.isfinite(d2[rows, best])
+        tb = t[rows, best]
+        va = values[edges[best, 0]]
+        value = va + tb * (values[edges[best, 1]] - va)
+        field[c[ok]] = value[ok]
+
+
 #: Colour scales of a plan.
 PLAN_SCALES = ("linear", "log")
 
@@ -95,6 +271,14 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
     value_range : (min, max) of the colours (default: the values').  Nothing is drawn over
     the room: the scale bar and the north arrow (+y) sit in a band below the plan, the
     legend beside it.
+
+    The colour covers each room of the outline out to its walls (:func:`_plan_rooms`,
+    :func:`_plan_field`): inside the triangulation of an area's points the values are
+    interpolated linearly, as the isolines; beyond the outer points (the wall margin,
+    around a column) each spot takes the value of the nearest point of its room, a constant
+    extrapolation that invents no gradient.  An area with points outside every closed room
+    (no outline, an outline that does not close around them) is coloured over its points'
+    triangulation only, as the isolines are; the plan is drawn all the same.
     """
     path = check_plot_path(path)
     xy = np.asarray(points, dtype=np.float64)
@@ -131,6 +315,7 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
     lo, hi = _limits(xy, segments)
+    plan = (lo, hi)                         # the plan without the band below
     width, height = hi - lo
     band = max(0.5, 0.1 * height)           # below the plan: scale bar and north arrow
     lo = lo - np.array([0.0, band])
@@ -157,12 +342,19 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
         locator = LogLocator(subs=(1.0, 2.0, 5.0)) if scale == "log" else MaxNLocator(nbins=8)
         levels = [x for x in locator.tick_values(vmin, vmax) if vmin < x < vmax]
         styles = ("dashed", "dashdot", "dotted", (0, (5, 1, 1, 1, 1, 1)))
+        own = np.full(len(xy), -1)
+        rooms = _plan_rooms(xy, walls, glazing)
+        if rooms:
+            field, extent, own = _plan_field(xy, shown, names, rooms, *plan)
+            ax.imshow(field, extent=extent, origin="lower", cmap="viridis", norm=norm, interpolation="nearest",
+                      aspect="equal")
         for name in dict.fromkeys(names.tolist()):
             sel = names == name
             tri = _masked_triangulation(xy[sel])
             if tri is None:
                 continue
-            ax.tripcolor(tri, shown[sel], shading="gouraud", cmap="viridis", norm=norm)
+            if (own[sel] < 0).any():        # outside a closed room: colour over the triangulation only
+                ax.tripcolor(tri, shown[sel], shading="gouraud", cmap="viridis", norm=norm)
             if levels:
                 cs = ax.tricontour(tri, shown[sel], levels=levels, colors="0.15", linewidths=0.6)
                 ax.clabel(cs, fontsize=7, fmt="%g")
