@@ -227,10 +227,12 @@ class LevelRecords:
             self._insert(0, count)
 
     # -- queries -----------------------------------------------------------------
-    def lookup(self, P, N, gradients: bool = False, zone=None):
+    def lookup(self, P, N, gradients: bool = False, zone=None, taper: bool = False):
         """Interpolated irradiance at queries (Eq. 5); with ``gradients`` each record's
         value is first extrapolated to the query by its gradients (Ward & Heckbert 1992).
         ``zone`` (n,) uint8 (default 0): each query is served by the records of its zone.
+        ``taper``: weights that fall to zero at the edge of each record's domain (for images;
+        :func:`lbl_illum.engine.octree.lookup`).
 
         Returns ``(E, weight_sum, count)``: (n, 3) float64, (n,) float64, (n,) int32;
         ``count == 0`` marks a query no record covers.  Each answer depends only on its
@@ -250,7 +252,7 @@ class LevelRecords:
                 order = np.arange(n)
             parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
             octree.lookup(P, N, _zones(zone, n), order, layout, self._values, self.leak, gradients, self.anisotropic, self.accuracy,
-                          out_E, out_w, out_n, parallel)
+                          out_E, out_w, out_n, parallel, taper)
         return out_E, out_w, out_n
 
     def covers(self, P, N, zone=None) -> np.ndarray:

@@ -576,12 +576,13 @@ class Integrator:
         return pending, None
 
     # -- evaluation (bottom-up) --------------------------------------------------------
-    def _answer(self, k, P, Ns, own_record):
+    def _answer(self, k, P, Ns, own_record, taper=False):
         """Irradiance of level k at queries, from its complete record set."""
         lv = self.cache.levels[k]
         if own_record is not None:
             return lv.E[own_record].astype(np.float64)
-        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper", zone=self.context.zone(P))
+        E, _, count = lv.lookup(P, Ns, gradients=self.options.interpolation != "paper" and not taper,
+                                zone=self.context.zone(P), taper=taper)
         return E
 
     def evaluate_level(self, k, pending: _Pending, next_answer, run: RunPlan):
@@ -689,8 +690,20 @@ class Integrator:
         return np.concatenate(own_parts)
 
     # -- the whole calculation -----------------------------------------------------------
-    def compute(self, points, normals, spacing: tuple[float, float] | None = None) -> IlluminanceResult:
+    def compute(self, points, normals, spacing: tuple[float, float] | None = None,
+                taper: bool = False) -> IlluminanceResult:
         """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``.
+
+        ``taper``: the points' indirect light is the weighted mean of the records' values
+        with weights 1 − ε_i/a, which fall to zero at the edge of each record's domain
+        (:func:`lbl_illum.engine.octree.lookup`), without extrapolating them by their
+        gradients: what the renderer asks for its pixels.  In an image the paper's weights
+        step where a domain ends (round blotches on a wall), and each record's own
+        gradient, a Monte Carlo estimate, carries it away from its neighbours' (a pattern
+        of scales where the nearest record dominates); the ramp without gradients leaves a
+        continuous mean.  On the office at ``high`` the pixels differ from the image with
+        gradients and the paper's weights by +0.24 % in the median.  Sensors with their own
+        records (``point_samples``) are not interpolated either way.
 
         ``spacing = (min, max)`` [m] are this run's record spacing limits where the options
         leave them unset (the renderer's limits from the view); by default they come from
@@ -757,7 +770,7 @@ class Integrator:
                 direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
                                                  light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
                 if solved:
-                    indirect = self._answer(0, points, normals, own0)
+                    indirect = self._answer(0, points, normals, own0, taper)
                 else:
                     indirect = np.zeros_like(direct)
             except BaseException as exc:

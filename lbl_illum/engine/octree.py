@@ -360,8 +360,8 @@ def _sector_open(mask, dx, dy, dz, mx, my, mz, Ri):
     return (mask >> np.uint32(sector)) & np.uint32(1) == 0
 
 
-def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, V, leak, perm, pos, nr, box, level_start,
-            packet_extent, out_E, out_w, out_n):
+def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, taper, V, leak, perm, pos, nr, box,
+            level_start, packet_extent, out_E, out_w, out_n):
     """Eq. 5 at each query ``order[k]``, the queries split into ``n_blocks`` runs (one
     per parallel task), each with its own buffers.
 
@@ -378,7 +378,7 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, V, leak, p
     (1 + 1e-9) is appended to a candidate buffer.  When the buffer could overflow, and
     at the end, the candidates are evaluated in two loops without data-dependent
     branches (error and weight of each, keeping the valid ones; then their values,
-    summed in order).  Records are met in layout order whatever the packet, so each
+    summed in order; with ``taper`` the weights 1 − ε_i/a).  Records are met in layout order whatever the packet, so each
     answer depends on its query alone.  Everything is written out in one function: a
     call per query or per chunk would cost two atomic reference counts per array argument.
     """
@@ -518,7 +518,10 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, V, leak, p
                         err = np.sqrt(d2) / Ri + np.sqrt(1.0 - ndot)
                         front = 0.5 * (dx * (nx + mx) + dy * (ny + my) + dz * (nz + mz))
                         hit_j[n_hit] = j
-                        hit_w[n_hit] = 1.0 / max(err, MIN_ERROR)
+                        if taper:
+                            hit_w[n_hit] = 1.0 - err / accuracy
+                        else:
+                            hit_w[n_hit] = 1.0 / max(err, MIN_ERROR)
                         n_hit += (err < accuracy) & (front >= -FRONT_TOLERANCE * Ri) & ok & (nr[4, j] == qz)
                     for c in range(n_hit):
                         j = hit_j[c]
@@ -648,7 +651,8 @@ def covered(qP, qN, qZ, layout: Layout, V, leak, shaped, accuracy, out, parallel
                lambda lo, hi: _covered_kernel(qP[lo:hi], qN[lo:hi], qZ[lo:hi], *shared, out[lo:hi]))
 
 
-def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel):
+def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel,
+           taper=False):
     """Interpolate (Eq. 5) the records valid at each query on a :func:`freeze` layout.
 
     qP, qN : (q, 3) float64 query positions [m] and unit normals
@@ -672,11 +676,19 @@ def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accura
     With ``shaped`` (Hessian-based records, :func:`lbl_illum.engine.hessian.hessian_radii`)
     the distance term of Eq. 5 is elliptical, sqrt(|d|² + (d·W_i)²)/R_i with R_i the long
     radius, and a record is not used for queries in its leak sectors.
+
+    With ``taper`` the weights are w_i = 1 − ε_i/a, which fall to zero at the edge of a
+    record's domain instead of jumping there from 0 to 1/a, and stay finite at the record
+    (Radiance 5 weighs its records with such ramps, ``tfunc`` in ``ambient.c``).  The
+    paper's weights make a visible step where a record's domain ends, a circle on a wall
+    in an image, and a peak at each record; the ramp leaves the average continuous.  (The
+    renderer asks for it without ``gradients``: :meth:`lbl_illum.engine.integrator.Integrator.compute`.)  Images use it (:meth:`lbl_illum.engine.integrator.Integrator.compute`'s
+    ``taper``); sensor values keep the paper's weights.
     """
     # a few blocks per thread: each block allocates its own buffers (the list of
     # level-1 boxes is sized for all of them)
     n_blocks = min(len(qP) // 256 + 1, 8 * numba.get_num_threads()) if parallel else 1
-    shared = (accuracy, bool(gradients), bool(shaped), V, leak, layout.perm, layout.pos, layout.nr, layout.box,
+    shared = (accuracy, bool(gradients), bool(shaped), bool(taper), V, leak, layout.perm, layout.pos, layout.nr, layout.box,
               layout.level_start, float(layout.packet_extent), out_E, out_w, out_n)
     if n_blocks == 1:
         _lookup_kernel(qP, qN, qZ, order, 1, *shared)

@@ -105,19 +105,26 @@ from .context import LightingContext
 from ..errors import InputError
 from .integrator import Integrator
 from .paths import CAMERA, WEIGHT_LIMIT, follow_paths
+from .raycast import Hits
 from ..options import Options
 from ..photometry import luminance
 from ..scene.materials import GLASS, LIGHT
 from ..scene.scenefile import Scene
-from ..scene.views import View
+from ..scene.views import View, sample_offsets
 
 __all__ = ["RenderResult", "RenderStats", "render_image", "trace_view_paths", "first_hit_sources", "image_options",
            "view_spacing", "WEIGHT_LIMIT"]
 
 #: Percentiles of the diffuse hits' coordinates whose box sets an image's record spacing.
 SPACING_PERCENTILES = (5.0, 95.0)
+#: Camera rays added to each pixel on an edge between surfaces (:func:`edge_pixels`), and
+#: what makes an edge: planes turned by more than EDGE_ANGLE [degrees], or apart by more
+#: than EDGE_DEPTH of the distance to the camera.
+EDGE_SAMPLES = 8
+EDGE_ANGLE = 10.0
+EDGE_DEPTH = 1e-3
 #: Random-stream tags (the integrator uses 1-4).
-_TAG_PIXELS, _TAG_PATHS = 11, 12
+_TAG_PIXELS, _TAG_PATHS, _TAG_EDGES = 11, 12, 13
 
 
 # ---------------------------------------------------------------------------
@@ -135,6 +142,7 @@ class RenderStats:
     width: int = 0
     height: int = 0
     pixel_samples: int = 1
+    edge_pixels: int = 0          # pixels on an edge between surfaces, given EDGE_SAMPLES more rays
     camera_rays: int = 0          # camera rays and their specular continuations
     diffuse_hits: int = 0         # path ends on diffuse surfaces (cache queries at level 0)
     rays: int = 0                 # every ray of the render: camera, records, shadow rays
@@ -261,7 +269,7 @@ def trace_view_paths(integ: Integrator, origins: np.ndarray, directions: np.ndar
 
 
 def first_hit_sources(context: LightingContext, origins: np.ndarray, directions: np.ndarray,
-                      tmax: np.ndarray | None = None) -> np.ndarray:
+                      tmax: np.ndarray | None = None, hits=None) -> np.ndarray:
     """(n,) bool: the camera rays whose first hit is a light source seen directly.
 
     A ray sees a source when it escapes (the sky, the ground glow or the sun's disk,
@@ -271,11 +279,11 @@ def first_hit_sources(context: LightingContext, origins: np.ndarray, directions:
     glass of :func:`lbl_illum.engine.paths.follow_paths`' first depth.  A diffuse,
     plastic or mirror surface is not a source; nor is a ray that ``tmax`` (n,) [m]
     clips (it sees nothing).  One closest-hit query per ray (``origins`` [m],
-    unit ``directions``).
+    unit ``directions``), unless its ``hits`` are given.
     """
     tracer = context.tracer
     o, d = np.asarray(origins, np.float64), np.asarray(directions, np.float64)
-    hits = tracer.intersect(o, d)
+    hits = tracer.intersect(o, d) if hits is None else hits
     clip = np.full(len(o), np.inf) if tmax is None else np.asarray(tmax, np.float64)
     reached = np.flatnonzero(hits.hit & (hits.t <= clip))
     source = ~hits.hit & ~np.isfinite(clip)
@@ -287,6 +295,54 @@ def first_hit_sources(context: LightingContext, origins: np.ndarray, directions:
         seen, _ = luminous.seen(o, d, np.minimum(hits.t, clip), None, tracer.length_scale)
         source[seen] = True
     return source
+
+
+def surface_keys(context: LightingContext, hits, tmax: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
+    """What each camera ray's first hit shows, for :func:`edge_pixels`: ``(material, normal,
+    offset, distance)`` — (n,) int material index (−1: the ray escapes or ``tmax`` clips
+    it), (n, 3) the triangle's unit normal, (n,) its plane's offset n · P [m] and the hit
+    distance t [m]."""
+    n = len(hits.hit)
+    reached = hits.hit if tmax is None else hits.hit & (hits.t <= tmax)
+    material = np.full(n, -1, np.int64)
+    normal = np.zeros((n, 3))
+    offset = np.zeros(n)
+    prim = hits.prim[reached]
+    material[reached] = context.scene.triangles.material[prim]
+    normal[reached] = context.tracer.normals[prim]
+    offset[reached] = np.einsum("ij,ij->i", normal[reached], context.tracer._v0[prim])
+    return material, normal, offset, np.where(reached, hits.t, 0.0)
+
+
+def edge_pixels(material: np.ndarray, normal: np.ndarray, offset: np.ndarray, distance: np.ndarray) -> np.ndarray:
+    """(h, w) bool: pixels on an edge between surfaces, from :func:`surface_keys` of their
+    camera rays shaped (h, w, s) (and (h, w, s, 3) for ``normal``).
+
+    Two rays see different surfaces when their materials differ (a miss counts as a
+    material), their planes turn by more than EDGE_ANGLE, or one plane lies in front of
+    the other by more than EDGE_DEPTH of the distance (a desk before the floor, a
+    partition before a wall of the same finish).  A pixel is on an edge when its own
+    rays differ, or its first ray differs from the first ray of a pixel beside it or
+    below it (both pixels are marked).  Triangles of one flat surface are one surface.
+    """
+    def differ(a, b):
+        m = material[a] != material[b]
+        same = ~m & (material[a] >= 0)
+        cos = np.einsum("...k,...k->...", normal[a], normal[b])
+        depth = np.abs(offset[a] - offset[b]) > EDGE_DEPTH * np.maximum(distance[a], distance[b]) + 1e-9
+        return m | (same & ((cos < np.cos(np.radians(EDGE_ANGLE))) | depth))
+
+    h, w, s = material.shape
+    edge = np.zeros((h, w), bool)
+    for k in range(1, s):
+        edge |= differ((slice(None), slice(None), 0), (slice(None), slice(None), k))
+    across = differ((slice(None), slice(0, w - 1), 0), (slice(None), slice(1, w), 0))
+    edge[:, :-1] |= across
+    edge[:, 1:] |= across
+    down = differ((slice(0, h - 1), slice(None), 0), (slice(1, h), slice(None), 0))
+    edge[:-1] |= down
+    edge[1:] |= down
+    return edge
 
 
 # ---------------------------------------------------------------------------
@@ -344,13 +400,33 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
         progress.describe(f"tracing {width} x {height} x {pixel_samples} camera rays")
     rng_pixels = np.random.default_rng(np.random.SeedSequence([opts.seed, _TAG_PIXELS]))
     origins, directions, valid = view.rays(width, height, rng_pixels, pixel_samples)
+    pixel = np.repeat(np.arange(height * width), pixel_samples)
+    first = integ.tracer.intersect(origins, directions)
+    aft = view.aft_distances(directions) if view.aft > 0 else None
+    keys = surface_keys(integ.context, first, aft)
+    keys[0][~valid] = -2
+    edge = np.flatnonzero(edge_pixels(*(k.reshape(height, width, pixel_samples, *k.shape[1:]) for k in keys)))
+    stats.edge_pixels = len(edge)
+    if len(edge):
+        # pixels on an edge between surfaces: EDGE_SAMPLES more rays, stratified over the pixel
+        rng_edges = np.random.default_rng(np.random.SeedSequence([opts.seed, _TAG_EDGES]))
+        offsets = (sample_offsets(EDGE_SAMPLES)[None] + rng_edges.random((len(edge), 1, 2))) % 1.0
+        row, col = np.divmod(edge, width)
+        x = (col[:, None] + offsets[..., 0]) / width
+        y = ((height - 1 - row)[:, None] + offsets[..., 1]) / height
+        o2, d2, v2 = view.image_rays(x.reshape(-1), y.reshape(-1))
+        more = integ.tracer.intersect(o2, d2)
+        origins, directions, valid = np.vstack([origins, o2]), np.vstack([directions, d2]), np.r_[valid, v2]
+        pixel = np.r_[pixel, np.repeat(edge, EDGE_SAMPLES)]
+        first = Hits(np.concatenate([first.t, more.t]), np.concatenate([first.prim, more.prim]))
     live = np.flatnonzero(valid)
     tmax = view.aft_distances(directions[live]) if view.aft > 0 else None
     rng_paths = np.random.default_rng(np.random.SeedSequence([opts.seed, _TAG_PATHS]))
     known, hits, camera_rays = trace_view_paths(integ, origins[live], directions[live], rng_paths, tmax,
                                                 progress)
     sees_source = np.zeros(len(valid), bool)
-    sees_source[live] = first_hit_sources(integ.context, origins[live], directions[live], tmax)
+    sees_source[live] = first_hit_sources(integ.context, origins[live], directions[live], tmax,
+                                          hits=Hits(first.t[live], first.prim[live]))
     stats.camera_rays = camera_rays
     stats.diffuse_hits = len(hits["ray"])
     t1 = time.perf_counter()
@@ -361,7 +437,7 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
     if len(hits["ray"]):
         # record spacing from the view where the options give none (view_spacing)
         spacing = view_spacing(hits["P"]) if opts.min_spacing is None and opts.max_spacing is None else None
-        result = integ.compute(hits["P"], hits["N"], spacing=spacing)
+        result = integ.compute(hits["P"], hits["N"], spacing=spacing, taper=True)
         _scatter_add(radiance, hits["ray"], hits["weight"] * result.rgb)
         rs = result.stats
         stats.records, stats.new_records, stats.queries = list(rs.records), list(rs.new_records), list(rs.queries)
@@ -373,14 +449,13 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
     stats.shade_seconds = time.perf_counter() - t1
 
     # 3. pixel = mean of its valid samples
-    full = np.zeros((len(valid), 3))
-    full[live] = radiance
-    full = full.reshape(height, width, pixel_samples, 3)
-    count = valid.reshape(height, width, pixel_samples).sum(axis=2)
-    rgb = full.sum(axis=2) / np.maximum(count, 1)[..., None]
+    full = np.zeros((height * width, 3))
+    _scatter_add(full, pixel[live], radiance)
+    count = np.bincount(pixel, weights=valid, minlength=height * width).reshape(height, width)
+    rgb = full.reshape(height, width, 3) / np.maximum(count, 1)[..., None]
     stats.rays = integ.tracer.rays_traced - rays_before
     stats.seconds = time.perf_counter() - t0
     if progress is not None:
         progress.describe("done")
-    source = sees_source.reshape(height, width, pixel_samples).any(axis=2)
+    source = (np.bincount(pixel, weights=sees_source, minlength=height * width) > 0).reshape(height, width)
     return RenderResult(rgb.astype(np.float32), count > 0, view, stats, opts, integ.cache, source)

@@ -9,11 +9,12 @@ from lbl_illum.engine.cache import LevelRecords
 from lbl_illum.engine.octree import FRONT_TOLERANCE, MIN_ERROR
 
 
-def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None, W=None, leak=None):
+def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None, W=None, leak=None, taper=False):
     """Eqs. 5 and 6 evaluated for every (query, record) pair with numpy; with gradients,
     record i contributes max(0, E_i + ∇_r E_i·(N_i × N) + ∇_t E_i·(P − P_i)) per channel.
     With ``W`` the distance is elliptical, sqrt(|d|² + (d·W_i)²), and a record is refused
-    in the sectors of its ``leak`` mask (angle of d from the first tangent of N_i)."""
+    in the sectors of its ``leak`` mask (angle of d from the first tangent of N_i).  With
+    ``taper`` each weight is 1 − ε_i/a."""
     d = qP[:, None, :] - P[None, :, :]
     dist = np.linalg.norm(d, axis=2)
     if W is not None:
@@ -30,7 +31,7 @@ def brute_force(qP, qN, P, N, E, R, a, Gr=None, Gt=None, W=None, leak=None):
         sector = np.floor(np.arctan2(v, u) * LEAK_SECTORS / (2 * np.pi)).astype(np.int64) % LEAK_SECTORS
         closed = (leak.astype(np.int64)[None, :] >> sector) & 1 == 1
         inside &= ~(closed & (u * u + v * v > 1e-6 * R[None, :].astype(np.float64) ** 2))
-    w = np.where(inside, 1.0 / np.maximum(err, MIN_ERROR), 0.0)
+    w = np.where(inside, 1.0 - err / a if taper else 1.0 / np.maximum(err, MIN_ERROR), 0.0)
     sw = w.sum(axis=1)
     Eq = np.broadcast_to(E.astype(np.float64)[None], d.shape)
     if Gr is not None:
@@ -83,6 +84,32 @@ def test_octree_lookup_equals_brute_force(seed, n_rec, a, spread):
     _, _, Eg = brute_force(qP, qN, P, N, E, R, a, Gr, Gt)
     E_oct, _, _ = lv.lookup(qP, qN, gradients=True)
     assert np.allclose(E_oct, Eg, rtol=1e-4, atol=1e-3)
+    # tapered weights (images): the same set S, weights 1 − ε/a
+    count_t, sw_t, Et = brute_force(qP, qN, P, N, E, R, a, Gr, Gt, taper=True)
+    E_oct, w_oct, n_oct = lv.lookup(qP, qN, gradients=True, taper=True)
+    assert np.array_equal(n_oct, count_t)
+    assert np.allclose(w_oct, sw_t, rtol=1e-4, atol=1e-6)
+    assert np.allclose(E_oct, Et, rtol=1e-4, atol=1e-3)
+
+
+def test_tapered_weights_leave_no_step_at_the_edge_of_a_domain():
+    """Two records on a floor, 100 and 200 lux: a query walking out of the second one's
+    domain (ε = a at x = 0.5 m) sees the average jump by more than 10 lux across 0.02 mm
+    with the paper's weights; with the tapered ones it changes by less than 0.01 lux (its
+    slope there is about 375 lux/m)."""
+    a = 0.5
+    lv = LevelRecords(a, center=np.zeros(3), half=4.0)
+    P = np.array([[0.0, 0.0, 0.0], [-0.2, 0.0, 0.0]])
+    N = np.array([[0, 0, 1], [0, 0, 1]], np.float32)
+    lv.add(P, N, np.array([1.0, 3.0], np.float32), np.array([[200.0] * 3, [100.0] * 3], np.float32))
+    x = np.array([0.49999, 0.50001])
+    qP = np.column_stack([x, np.zeros(2), np.zeros(2)])
+    qN = np.tile([0.0, 0.0, 1.0], (2, 1))
+    paper, _, n = lv.lookup(qP, qN)
+    tapered, _, _ = lv.lookup(qP, qN, taper=True)
+    assert n.tolist() == [2, 1]
+    assert abs(paper[0, 0] - paper[1, 0]) > 10.0
+    assert abs(tapered[0, 0] - tapered[1, 0]) < 0.01
 
 
 def _floor_and_walls(rng, n):

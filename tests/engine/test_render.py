@@ -32,8 +32,8 @@ import pytest
 from lbl_illum import Options
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.scene.materials import plastic_fresnel, thin_pane_reflectance, ward_brdf
-from lbl_illum.engine.render import (WEIGHT_LIMIT, first_hit_sources, image_options, render_image, trace_view_paths,
-                                     view_spacing)
+from lbl_illum.engine.render import (EDGE_SAMPLES, WEIGHT_LIMIT, edge_pixels, first_hit_sources, image_options,
+                                     render_image, trace_view_paths, view_spacing)
 from lbl_illum.daylight.sun import SUN_SOLID_ANGLE
 from lbl_illum.scene.scenefile import scene_from_dict
 from lbl_illum.scene.views import View, view_from_string
@@ -193,7 +193,10 @@ def test_weak_branches_play_russian_roulette_without_bias():
 
 def test_light_surface_seen_directly_and_edge_pixels_are_sample_means():
     """A parallel 8 m × 8 m view (1 m pixels) of a light covering x > 0.5 on black:
-    16 stratified samples per pixel put exactly 8 in each half of the edge column."""
+    16 stratified samples per pixel put exactly 8 in each half of the edge column, and the
+    EDGE_SAMPLES added there (stratified too) 4 of 8.  With one sample per pixel the edge
+    column has 1 + 8 samples: 4 or 5 of 9 on the light, never all or none, which is what
+    made a speckled line of an edge."""
     geo = [{"shape": "rectangle", "origin": [0.5, -10, 0], "u": [20, 0, 0], "v": [0, 20, 0], "material": "lamp"}]
     scene = make_scene(geo, {"lamp": {"type": "light", "luminance": 1000.0}}, {"type": "none"})
     view = view_from_string("-vtl -vp 0 0 5 -vd 0 0 -1 -vu 0 1 0 -vh 8 -vv 8")
@@ -202,8 +205,39 @@ def test_light_surface_seen_directly_and_edge_pixels_are_sample_means():
     np.testing.assert_allclose(lum[:, :4], 0.0)
     np.testing.assert_allclose(lum[:, 4], 500.0, rtol=1e-6)
     np.testing.assert_allclose(lum[:, 5:], 1000.0, rtol=1e-6)
-    one = render_image(scene, view, 8, 8, QUICK, pixel_samples=1).luminance   # jittered: 0 or 1000
-    assert set(np.unique(one[:, 4]).tolist()) <= {0.0, 1000.0}
+    # column 4 (its rays differ), and the neighbour its first ray differs from
+    assert EDGE_SAMPLES == 8 and result.stats.edge_pixels == 8 * 2
+    one = render_image(scene, view, 8, 8, QUICK, pixel_samples=1)
+    edge = one.luminance[:, 4] / 1000.0
+    assert np.all(np.isclose(edge, 4 / 9, rtol=1e-6) | np.isclose(edge, 5 / 9, rtol=1e-6))
+    np.testing.assert_allclose(one.luminance[:, :4], 0.0)
+    np.testing.assert_allclose(one.luminance[:, 5:], 1000.0, rtol=1e-6)
+
+
+def _keys(material, normal, offset, distance=None):
+    """(1, k, 1) surface keys of a row of k pixels, one ray each."""
+    material = np.asarray(material)[None, :, None]
+    normal = np.asarray(normal, float)[None, :, None, :]
+    offset = np.asarray(offset, float)[None, :, None]
+    distance = np.full(offset.shape, 3.0) if distance is None else np.asarray(distance, float)[None, :, None]
+    return material, normal, offset, distance
+
+
+def test_edges_are_between_surfaces_not_between_triangles_of_one_surface():
+    """Pixels 0-1: two triangles of one wall (same material, plane and offset to round-off);
+    1-2: a partition 5 cm before the wall, same finish; 3-4: the floor meeting the wall at
+    90 degrees; 5-6: the sky beside the wall.  Both pixels of each differing pair are edges."""
+    wall, floor = [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]
+    edge = edge_pixels(*_keys([1, 1, 1, 1, 2, 1, -1],
+                              [wall, wall, wall, wall, floor, wall, [0, 0, 0]],
+                              [3.0, 3.0 + 1e-9, 2.95, 2.95, 0.0, 3.0, 0.0]))
+    assert edge[0].tolist() == [False, True, True, True, True, True, True]
+    one_surface = edge_pixels(*_keys([1, 1, 1], [wall, wall, wall], [3.0, 3.0 + 1e-9, 3.0 - 1e-9]))
+    assert not one_surface.any()
+    turned = np.array([0.0, -np.cos(np.radians(12.0)), np.sin(np.radians(12.0))])
+    assert edge_pixels(*_keys([1, 1], [wall, turned], [3.0, 3.0]))[0].all()
+    slightly = np.array([0.0, -np.cos(np.radians(5.0)), np.sin(np.radians(5.0))])
+    assert not edge_pixels(*_keys([1, 1], [wall, slightly], [3.0, 3.0])).any()
 
 
 def test_fisheye_corners_are_invalid_and_zero():
@@ -216,7 +250,13 @@ def test_fisheye_corners_are_invalid_and_zero():
     assert np.all(result.rgb[~result.valid] == 0.0)
     # every valid sample looks at the sky (above the horizon): pixel = mean of valid samples
     np.testing.assert_allclose(result.rgb[result.valid], E_H / np.pi, rtol=1e-6)
-    assert 0.7 < result.valid.mean() < 0.85                   # π/4 of the square, plus edge pixels
+    # valid: every pixel wholly inside the circle, none wholly outside it (rim pixels, which
+    # get edge rays, may be either)
+    lo = np.arange(16.0)
+    near = np.hypot(np.clip(8.0, lo, lo + 1)[:, None] - 8.0, np.clip(8.0, lo, lo + 1)[None, :] - 8.0)
+    far = np.hypot(np.maximum(np.abs(lo - 8.0), np.abs(lo + 1 - 8.0))[:, None],
+                   np.maximum(np.abs(lo - 8.0), np.abs(lo + 1 - 8.0))[None, :])
+    assert result.valid[far < 8.0 - 1e-9].all() and not result.valid[near > 8.0 + 1e-9].any()
 
 
 def test_aft_clipping_is_black_beyond_the_plane():
