@@ -350,14 +350,14 @@ def _compute(scene, args, points, normals):
     if not args.quiet:
         for note in integ.portal_notes():
             print(f"lbl-illum: note: {note}", file=sys.stderr)
-    compile_notice(enabled=not args.quiet)
     bar = _ProgressBar(enabled=not args.quiet)
     integ.progress = bar
     try:
         if args.cache:
             from ..io.cachefile import attach_cache_file
             attach_cache_file(integ, args.cache, rebuild=args.rebuild_cache)
-        result = integ.compute(points, normals)       # writes the cache file too
+        with compile_notice(enabled=not args.quiet, bar=bar):
+            result = integ.compute(points, normals)       # writes the cache file too
     finally:
         bar.close()
     return result, integ, options

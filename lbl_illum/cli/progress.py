@@ -19,6 +19,9 @@ __all__ = ["ProgressBar", "LINE_SECONDS", "compile_notice"]
 
 #: Seconds between two plain progress lines (standard error not a terminal).
 LINE_SECONDS = 5.0
+#: What compiling the kernels adds to a first run [s]: the README command on 2 cores, first
+#: run against the next (``validation/bench/commands.py``: 27.0 s against 15.8 s).
+COMPILE_SECONDS = 11
 
 
 class ProgressBar:
@@ -94,12 +97,46 @@ def _is_terminal(stream) -> bool:
         return False
 
 
-def compile_notice(enabled: bool, stream=None) -> None:
-    """Say, before the work starts, that numba compiles the engine's kernels: the first run
-    after installing, which they take most of half a minute of (kept on disk after it;
-    :func:`lbl_illum.engine.compiled.kernels_on_disk`)."""
+def compile_notice(enabled: bool, stream=None, bar: ProgressBar | None = None):
+    """On the first run after installing, when numba has not compiled the engine's kernels
+    yet (:func:`lbl_illum.engine.compiled.kernels_on_disk`), say so before the work starts
+    (when ``enabled``).  Returns a context manager for the work: on a first run, while it
+    lasts, each kernel numba compiles is named in ``bar`` ("compiling kernels, first run
+    only"), so the display does not stand still without saying why; otherwise it does
+    nothing."""
+    import contextlib
+
     from ..engine.compiled import kernels_on_disk
 
-    if enabled and not kernels_on_disk():
-        print("lbl-illum: note: compiling the calculation's kernels (first run after installing only; "
-              "about 15-30 s on 2 cores)", file=stream if stream is not None else sys.stderr, flush=True)
+    if kernels_on_disk():
+        return contextlib.nullcontext()
+    if enabled:
+        print("lbl-illum: note: compiling the calculation's kernels, first run after installing only "
+              f"(about {COMPILE_SECONDS} s more on 2 cores)", file=stream if stream is not None else sys.stderr,
+              flush=True)
+    if bar is None or not bar.enabled:
+        return contextlib.nullcontext()
+    from numba.core import event
+
+    return event.install_listener("numba:compile", _compile_listener(bar))
+
+
+def _compile_listener(bar: ProgressBar):
+    """A numba ``numba:compile`` listener naming each outermost compilation in ``bar``."""
+    from numba.core import event
+
+    class CompileListener(event.Listener):
+        depth = count = 0
+
+        def on_start(self, ev) -> None:
+            if self.depth == 0:
+                self.count += 1
+                bar.describe(f"compiling kernels, first run only ({self.count})")
+                if bar.bar is not None and bar.clock() - bar.start >= bar.bar.delay:
+                    bar.bar.refresh()
+            self.depth += 1
+
+        def on_end(self, ev) -> None:
+            self.depth -= 1
+
+    return CompileListener()

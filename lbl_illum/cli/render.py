@@ -247,7 +247,6 @@ def render_command(args, progress=None) -> int:
     if not quiet:
         for note in integ.portal_notes():
             print(f"lbl-illum: note: {note}", file=sys.stderr)
-    compile_notice(enabled=not quiet and progress is None)
     bar = progress if progress is not None else _Bar(enabled=not quiet)
     integ.progress = bar
     try:
@@ -261,8 +260,9 @@ def render_command(args, progress=None) -> int:
                     raise InputError(f"{exc}; images do not use point_samples, so a cache made with them "
                                      "(e.g. --preset medium) is not shared") from None
                 raise
-        result = render_image(scene, view, width, height, pixel_samples=_arg(args, "pixel_samples", 1) or 1,
-                        progress=bar, integrator=integ)
+        with compile_notice(enabled=not quiet and progress is None, bar=bar if progress is None else None):
+            result = render_image(scene, view, width, height, pixel_samples=_arg(args, "pixel_samples", 1) or 1,
+                                  progress=bar, integrator=integ)
     finally:
         if progress is None:
             bar.close()

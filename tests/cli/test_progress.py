@@ -46,18 +46,42 @@ def test_quiet_prints_nothing():
 
 
 def test_compile_notice_only_when_kernels_are_missing(monkeypatch):
+    """A first run says so, unless quiet; a later one says nothing."""
     from lbl_illum.engine import compiled
 
     out = io.StringIO()
     monkeypatch.setattr(compiled, "kernels_on_disk", lambda: False)
     compile_notice(True, stream=out)
     compile_notice(False, stream=out)
-    assert out.getvalue().startswith("lbl-illum: note: compiling the calculation's kernels (first run")
+    assert out.getvalue().startswith("lbl-illum: note: compiling the calculation's kernels, first run")
     assert len(out.getvalue().splitlines()) == 1
     monkeypatch.setattr(compiled, "kernels_on_disk", lambda: True)
     out = io.StringIO()
     compile_notice(True, stream=out)
     assert out.getvalue() == ""
+
+
+def test_a_first_run_names_each_compilation_in_the_progress_display(monkeypatch):
+    """While the work runs on a first run, every kernel numba compiles is named in the
+    progress display (a plain line here, the clock past LINE_SECONDS), and only then."""
+    import numba
+
+    from lbl_illum.engine import compiled
+
+    monkeypatch.setattr(compiled, "kernels_on_disk", lambda: False)
+    out, clock = io.StringIO(), Clock()
+    bar = ProgressBar(True, stream=out, clock=clock)
+    clock.now += 2 * LINE_SECONDS
+
+    def fresh_kernel(x):
+        return x + 1
+
+    with compile_notice(True, stream=io.StringIO(), bar=bar):
+        numba.njit(fresh_kernel)(1)
+    assert out.getvalue().startswith("lbl-illum: compiling kernels, first run only (1)")
+    clock.now += 2 * LINE_SECONDS
+    numba.njit(lambda x: x + 2)(1)                    # after the work: nothing said
+    assert bar.stage == "compiling kernels, first run only (1)"
 
 
 def test_kernels_on_disk_reads_numba_index_files(monkeypatch, tmp_path):
