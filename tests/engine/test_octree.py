@@ -301,3 +301,15 @@ def test_covers_is_exactly_a_nonzero_lookup_count(seed, n_rec, a, shaped):
     qN[3000:] = _unit(rng.normal(size=(len(qP) - 3000, 3)))
     assert np.array_equal(lv.covers(qP, qN), lv.lookup(qP, qN)[2] > 0)
     assert np.array_equal(lv.covers(qP[:100], qN[:100]), lv.lookup(qP[:100], qN[:100])[2] > 0)   # serial
+
+
+def test_the_layout_sort_is_stable_on_both_sides_of_the_radix_threshold():
+    """Keys with many ties (few distinct values) and keys over all 64 bits: the radix sort
+    for many keys and numpy's for few give numpy's stable order."""
+    from lbl_illum.engine.octree import RADIX_MIN, _stable_order
+
+    rng = np.random.default_rng(3)
+    for n in (RADIX_MIN - 1, RADIX_MIN, 3 * RADIX_MIN):
+        for keys in (rng.integers(0, 50, n).astype(np.uint64),
+                     rng.integers(0, 2**63, n, dtype=np.uint64) | np.uint64(1 << 63)):
+            np.testing.assert_array_equal(_stable_order(keys), np.argsort(keys, kind="stable"))
