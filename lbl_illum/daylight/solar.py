@@ -312,22 +312,26 @@ def air_mass_kasten1966(zenith):
     return 1.0 / (np.cos(np.radians(z)) + 0.15 * (93.885 - z) ** -1.253)
 
 
-def extraterrestrial_normal_irradiance(day: float | None) -> float:
+def extraterrestrial_normal_irradiance(day):
     """Extraterrestrial normal irradiance E_0 [W/m²] on day of year ``day`` (1 = 1 January):
     the solar constant 1367 W/m² times Spencer's (1971) eccentricity correction
     1.00011 + 0.034221 cos Γ + 0.00128 sin Γ + 0.000719 cos 2Γ + 0.000077 sin 2Γ, Γ = 2π (day − 1)/365.
-    ``day=None`` gives the mean distance, 1367 W/m²."""
+    ``day=None`` gives the mean distance, 1367 W/m².  A float for a scalar day, an array for
+    an array of days."""
     if day is None:
         return SOLAR_CONSTANT
-    g = 2.0 * math.pi * (day - 1) / 365.0
-    return SOLAR_CONSTANT * (1.00011 + 0.034221 * math.cos(g) + 0.00128 * math.sin(g)
-                             + 0.000719 * math.cos(2 * g) + 0.000077 * math.sin(2 * g))
+    g = 2.0 * np.pi * (np.asarray(day, dtype=np.float64) - 1) / 365.0
+    e0 = SOLAR_CONSTANT * (1.00011 + 0.034221 * np.cos(g) + 0.00128 * np.sin(g)
+                           + 0.000719 * np.cos(2 * g) + 0.000077 * np.sin(2 * g))
+    return float(e0) if e0.ndim == 0 else e0
 
 
-def precipitable_water(dew_point: float) -> float:
+def precipitable_water(dew_point):
     """Atmospheric precipitable water W [cm] from the surface dew point [°C]:
-    W = exp(0.07 T_d − 0.075) (Perez et al. 1990, after Wright, Perez & Michalsky 1989)."""
-    return math.exp(0.07 * dew_point - 0.075)
+    W = exp(0.07 T_d − 0.075) (Perez et al. 1990, after Wright, Perez & Michalsky 1989).
+    A float for a scalar, an array for an array."""
+    w = np.exp(0.07 * np.asarray(dew_point, dtype=np.float64) - 0.075)
+    return float(w) if w.ndim == 0 else w
 
 
 # ---------------------------------------------------------------------------
@@ -371,11 +375,13 @@ class WeatherRecord:
 
 @dataclass
 class WeatherFile:
-    """An EPW file: its site (from the ``LOCATION`` line) and its hourly records."""
+    """An EPW file: its site (from the ``LOCATION`` line), its hourly records and its header
+    lines (``LOCATION`` … ``DATA PERIODS``, as read)."""
 
     path: Path
     site: Site
     records: list[WeatherRecord]
+    header: tuple[str, ...] = ()
 
     def record_at(self, time: Any, where: str, key: str = "time") -> tuple[WeatherRecord, _dt.datetime]:
         """The record of ``time`` (``"MM-DD HH:MM"``, local standard time) and that time as a
@@ -435,13 +441,7 @@ def read_epw(path: str | Path, where: str | None = None) -> WeatherFile:
     """
     path = Path(path)
     label = where or path.name
-    try:
-        text = path.read_bytes().decode("utf-8", errors="replace")
-    except FileNotFoundError:
-        raise InputError(f"{label}: no such weather file") from None
-    except OSError as exc:
-        raise InputError(f"{label}: cannot read ({exc.strerror or exc})") from None
-    lines = text.splitlines()
+    lines = _weather_file_lines(path, label)
     if not lines or not lines[0].upper().startswith("LOCATION"):
         raise InputError(f"{label}: line 1: an EPW file starts with a LOCATION line")
     site = _epw_site(lines[0], label)
@@ -452,7 +452,19 @@ def read_epw(path: str | Path, where: str | None = None) -> WeatherFile:
         records.append(_epw_record(line, i, label))
     if not records:
         raise InputError(f"{label}: no data lines after the {_EPW_HEADER_LINES} header lines")
-    return WeatherFile(path=path, site=site, records=records)
+    return WeatherFile(path=path, site=site, records=records, header=tuple(lines[:_EPW_HEADER_LINES]))
+
+
+def _weather_file_lines(path: Path, label: str) -> list[str]:
+    """The lines of a weather file (undecodable bytes replaced), or an :class:`InputError`
+    naming it when it is missing or cannot be read."""
+    try:
+        text = path.read_bytes().decode("utf-8", errors="replace")
+    except FileNotFoundError:
+        raise InputError(f"{label}: no such weather file") from None
+    except OSError as exc:
+        raise InputError(f"{label}: cannot read ({exc.strerror or exc})") from None
+    return text.splitlines()
 
 
 def _epw_site(line: str, label: str) -> Site:
