@@ -55,7 +55,7 @@ def sda_plan(path: str | os.PathLike, points, da, *, threshold: float = 300.0, a
               quantity=f"DA{threshold:g} >= 50 %", unit="1 pass, 0 fail", thresholds=[0.5],
               title=title or (f"sDA{threshold:g}/50% = {share:.0f} % of points: DA{threshold:g} >= 50 % "
                               "(1, yellow) or not (0), the boundary dashed"),
-              summary=summary, value_range=(0.0, 1.0), dpi=dpi)
+              summary=summary, value_range=(0.0, 1.0), isolines=False, dpi=dpi)
 
 
 def ase_plan(path: str | os.PathLike, points, hours, *, areas=None, outline=None, windows=None,

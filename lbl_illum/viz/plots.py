@@ -259,7 +259,7 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
               areas: np.ndarray | None = None, outline: np.ndarray | None = None,
               windows: np.ndarray | None = None, quantity: str = "Illuminance", unit: str = "lux",
               thresholds=(), title: str | None = None, summary: str | None = None, scale: str = "linear",
-              value_range: tuple[float, float] | None = None, dpi: int = 150) -> None:
+              value_range: tuple[float, float] | None = None, isolines: bool = True, dpi: int = 150) -> None:
     """Draw a plan of a grid into ``path`` (.png, .pdf or .svg).
 
     points : (n, 2 or 3) plan positions [m];  values : (n,) finite, or None to draw the
@@ -268,7 +268,8 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
     thresholds : values drawn as isolines, one line style each;  title : the sheet's title;
     summary : a line of figures printed under it;  scale : ``"linear"`` or ``"log"`` (a
     sunlit room: sun patches of 47,000 lux no longer turn the rest into one colour);
-    value_range : (min, max) of the colours (default: the values').  Nothing is drawn over
+    value_range : (min, max) of the colours (default: the values');  isolines : False leaves out
+    the isolines at round values (a pass/fail map: only its thresholds).  Nothing is drawn over
     the room: the scale bar and the north arrow (+y) sit in a band below the plan, the
     legend beside it.
 
@@ -355,7 +356,7 @@ def plan_plot(path: str | os.PathLike, points: np.ndarray, values: np.ndarray | 
                 continue
             if (own[sel] < 0).any():        # outside a closed room: colour over the triangulation only
                 ax.tripcolor(tri, shown[sel], shading="gouraud", cmap="viridis", norm=norm)
-            if levels:
+            if levels and isolines:
                 cs = ax.tricontour(tri, shown[sel], levels=levels, colors="0.15", linewidths=0.6)
                 ax.clabel(cs, fontsize=7, fmt="%g")
             for i, t in enumerate(thresholds):

@@ -141,3 +141,18 @@ def test_bad_plot_name(tmp_path, room):
         da_plan(tmp_path / "da.jpg", room[0], room[1])
     with pytest.raises(InputError, match="must end in"):
         day_hour_plot(tmp_path / "heat.bmp", np.ones(8760))
+
+
+def test_the_pass_fail_plan_has_its_boundary_and_no_round_isolines(tmp_path, room, monkeypatch):
+    """Round-value isolines on a 0/1 map would stack up where pass turns to fail: the sDA
+    plan draws only its boundary at ½, the DA plan its isolines as any plan."""
+    import matplotlib.axes
+
+    labels = []
+    real = matplotlib.axes.Axes.clabel
+    monkeypatch.setattr(matplotlib.axes.Axes, "clabel", lambda self, *a, **k: labels.append(1) or real(self, *a, **k))
+    points, da, _, areas = room
+    sda_plan(tmp_path / "sda.png", points, da, areas=areas, outline=WALLS, windows=WINDOWS)
+    assert labels == []
+    da_plan(tmp_path / "da.png", points, da, areas=areas, outline=WALLS, windows=WINDOWS)
+    assert labels
