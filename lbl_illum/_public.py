@@ -1,8 +1,8 @@
 """The public surface of a layer package, in one place.
 
-Each layer (``scene``, ``daylight``, ``engine``, ``io``, ``workplane``, ``viz``) names in its
-``__init__`` the few things a script, a notebook or a validation study may use, module by
-module; everything else is internal and may change.  The names are imported when first
+Each layer (``scene``, ``daylight``, ``engine``, ``io``, ``workplane``, ``viz``, ``glare``) names
+in its ``__init__`` the few things a script, a notebook or a validation study may use, module
+by module; everything else is internal and may change.  The names are imported when first
 used (PEP 562), so ``import lbl_illum.scene`` costs nothing and the layers can import each
 other's modules without import cycles.
 """

@@ -1,5 +1,5 @@
-"""Command line: ``lbl-illum illuminance``, ``daylight-factor``, ``grid``, ``view``, ``validate``
-and ``export radiance``.
+"""Command line: ``lbl-illum illuminance``, ``daylight-factor``, ``grid``, ``view``, ``glare``,
+``validate`` and ``export radiance``.
 
 The command line only parses arguments and calls the library.  Bad input ends with
 one line on standard error naming the file, line or key, exit status 2 and no
@@ -248,6 +248,13 @@ def _build_parser() -> argparse.ArgumentParser:
     add_render_arguments(r)
     _add_quality_options(r)
 
+    from .glare import add_glare_arguments
+    add_glare_arguments(sub.add_parser("glare", help="glare of a 180 degree fisheye image: DGP, Ev, sources, DGI, UGR",
+                                       description="Glare figures of a 180 degree fisheye luminance image (-vta or "
+                                       "-vth, with its VIEW= line) as Radiance's evalglare computes them: vertical "
+                                       "illuminance, glare sources, position index, DGP (low-light corrected), DGI, "
+                                       "UGR and the EN 17037 class; see docs/glare.md."))
+
     try:
         STUDIES = _studies().STUDIES
     except InputError:        # said when the command is used
@@ -301,6 +308,7 @@ studies:
   office-daylight     office DF against Radiance rtrace (overcast; clear sky with sun) and gensky's horizon blend
   corpus              every preset on daylit interiors modelled by others, whole commands against references
   electric            CIE 171 point, area, flux and interreflection cases, a translucent skylight, IES downlights
+  glare               DGP, Ev and glare sources of fisheye images against evalglare, a hand-evaluated case and Ev at the eye
 """
 
 
@@ -747,6 +755,9 @@ def main(argv=None) -> int:
             from .render import check_image_size, render_command
             check_image_size(args)          # before the scene is even read
             return render_command(args)
+        if args.command == "glare":
+            from .glare import glare_command
+            return glare_command(args)
         if args.command == "validate":
             return _run_validate(args)
         if args.command == "export":

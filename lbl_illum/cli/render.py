@@ -119,6 +119,9 @@ def add_render_arguments(parser) -> None:
                         "over a grey picture (as falsecolor -cl)")
     o.add_argument("--falsecolor-title", metavar="TEXT",
                    help="the false-colour picture's title, wrapped to its width (default: the scene file)")
+    o.add_argument("--glare", action="store_true", help="report the glare of the fisheye rendered (-vta or -vth, "
+                   "180 degrees): DGP, Ev, sources, DGI, UGR, as lbl-illum glare does")
+    o.add_argument("--glare-json", metavar="JSON", help="with or without --glare: write its figures as JSON")
     from .cache import add_cache_file_arguments
 
     add_cache_file_arguments(o)
@@ -213,6 +216,8 @@ def _check_outputs(args) -> None:
         if extra and not Path(extra).resolve().parent.is_dir():
             raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
     check_image_size(args)
+    from .glare import check_glare_json
+    check_glare_json(_arg(args, "glare_json"), "--glare-json")
     top = _arg(args, "falsecolor_max")
     if top is not None and not (math.isfinite(top) and top > 0):
         raise InputError(f"--falsecolor-max must be a positive luminance [cd/m2], got {top:g}")
@@ -238,6 +243,10 @@ def render_command(args, progress=None) -> int:
     quiet = bool(_arg(args, "quiet", False))
     scene = load_scene(args.scene)
     view = resolve_view(scene, _arg(args, "view"), _arg(args, "view_file"))
+    glare = bool(_arg(args, "glare") or _arg(args, "glare_json"))
+    if glare:
+        from ..glare.metrics import check_fisheye
+        check_fisheye(view, "--glare")
     width, height = view.resolution(_arg(args, "x", 512), _arg(args, "y", 512))
     options = _options_from_args(scene, args)
     if not quiet:
@@ -293,6 +302,9 @@ def render_command(args, progress=None) -> int:
               f"sample{'s' if stats.pixel_samples != 1 else ''}/pixel) in {seconds:.2f} s; records per level "
               f"{stats.records} ({stats.records_made} new); {stats.rays:,} rays; luminance median "
               f"{readable(lum['median'])}, max {readable(lum['max'])} cd/m2 -> {args.output}", file=sys.stderr)
+    if glare:
+        from .glare import report_glare
+        report_glare(result.luminance, view, args.output, _arg(args, "glare_json"), quiet)
     return 0
 
 

@@ -37,6 +37,7 @@ STUDIES = {
     "office-daylight": "office_daylight",
     "corpus": "corpus",
     "electric": "electric",
+    "glare": "glare",
 }
 
 
