@@ -102,7 +102,8 @@ def add_render_arguments(parser) -> None:
     v.add_argument("-y", type=int, default=512, metavar="H", help="largest height in pixels (default 512); "
                    "as rpict, one of them shrinks so that pixels are square")
     v.add_argument("--pixel-samples", type=int, default=1, metavar="N",
-                   help="jittered rays per pixel, averaged (default 1)")
+                   help="jittered rays per pixel, averaged (default 1); a pixel on an edge between "
+                        "surfaces gets 8 more")
     o = parser.add_argument_group("output")
     o.add_argument("-o", "--output", required=True, metavar="IMAGE",
                    help="luminance image: .exr (float cd/m2), .hdr (Radiance RGBE with VIEW=), .tif")
