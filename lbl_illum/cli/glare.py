@@ -13,20 +13,13 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
+from .shared import check_output_file, finite
 
-__all__ = ["add_glare_arguments", "glare_command", "check_glare_json", "report_glare"]
+__all__ = ["add_glare_arguments", "glare_command", "report_glare"]
 
 
-def _positive(text: str) -> float:
-    import argparse
-
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
-    return value
+#: argparse type of the glare command's luminances, factors and angles.
+_positive = finite(0.0, above=True)
 
 
 def add_glare_arguments(parser) -> None:
@@ -61,19 +54,6 @@ def add_glare_arguments(parser) -> None:
     parser.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
 
-def check_glare_json(path: str | None, option: str = "--json") -> None:
-    """Refuse a JSON output that cannot be written, before any work."""
-    if not path:
-        return
-    out = Path(path)
-    if out.suffix.lower() != ".json":
-        raise InputError(f"{option} {path}: the file must end in .json")
-    if out.is_dir():
-        raise InputError(f"{option} {path}: is a folder; give a file name")
-    if not out.resolve().parent.is_dir():
-        raise InputError(f"{option} {path}: folder {out.parent} does not exist")
-
-
 def _write_json(path: str, doc: dict) -> None:
     from ..io.files import atomic_write_text
 
@@ -100,7 +80,7 @@ def glare_command(args) -> int:
     from ..glare.metrics import glare_from_image
     from ..scene.views import view_from_string
 
-    check_glare_json(args.json)
+    check_output_file(args.json, ".json", "--json")
     view = view_from_string(args.view, "--view") if args.view else None
     result = glare_from_image(args.image, view=view, threshold=args.threshold, factor=args.factor,
                               task=tuple(args.task) if args.task else None,

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import textwrap
 import time
@@ -19,7 +18,7 @@ from pathlib import Path
 from .._version import __version__
 from ..errors import InputError
 from ..optional import check as check_optional
-from .shared import run_options
+from .shared import check_output_file, finite as _finite, run_options, whole as _whole
 from .progress import ProgressBar, compile_notice
 from ..options import DEFAULT_PRESET, INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
@@ -36,39 +35,6 @@ quality options (also settable under [settings] in the scene file; the command l
 
 
 _ProgressBar = ProgressBar
-
-
-def _whole(minimum: int = 0, maximum: int | None = None):
-    """An argparse type: a whole number within [minimum, maximum]."""
-    def parse(text):
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
-        if maximum is not None and value > maximum:
-            raise argparse.ArgumentTypeError(f"must be <= {maximum}, got {value}")
-        return value
-    return parse
-
-
-def _finite(minimum: float | None = None, maximum: float | None = None, above: bool = False):
-    """An argparse type: a finite number, at least ``minimum`` (greater with ``above``) and
-    at most ``maximum``."""
-    def parse(text):
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
-        if minimum is not None and (value < minimum or (above and value == minimum)):
-            raise argparse.ArgumentTypeError(f"must be {'>' if above else '>='} {minimum:g}, got {value:g}")
-        if maximum is not None and value > maximum:
-            raise argparse.ArgumentTypeError(f"must be <= {maximum:g}, got {value:g}")
-        return value
-    return parse
 
 
 _number = _finite()
@@ -325,10 +291,7 @@ def _check_run_files(args) -> None:
     if args.rebuild_cache and not args.cache:
         raise InputError("--rebuild-cache: give the cache file with --cache FILE")
     for extra in (args.stats, args.cache, args.summary):
-        if extra and not Path(extra).resolve().parent.is_dir():
-            raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
-        if extra and Path(extra).is_dir():
-            raise InputError(f"{extra}: is a folder; give a file name")
+        check_output_file(extra)
     if args.plot:
         check_plot_path(args.plot)
     elif args.plot_title is not None or args.plot_range is not None or args.plot_scale != "linear":

@@ -23,7 +23,7 @@ from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
 from .progress import ProgressBar as _Bar, compile_notice
 from ..workplane.metrics import readable
-from .shared import run_options
+from .shared import check_output_file, run_options
 from ..viz.falsecolor import SCALES, STYLES
 
 __all__ = ["add_render_arguments", "render_command", "resolve_view", "scene_views", "check_image_size",
@@ -214,11 +214,9 @@ def _check_outputs(args) -> None:
         raise InputError("--falsecolor-max, --falsecolor-scale, --falsecolor-style and --falsecolor-title "
                          "go with --falsecolor PNG")
     for extra in (_arg(args, "cache"), _arg(args, "stats")):
-        if extra and not Path(extra).resolve().parent.is_dir():
-            raise InputError(f"{extra}: folder {Path(extra).parent} does not exist")
+        check_output_file(extra)
     check_image_size(args)
-    from .glare import check_glare_json
-    check_glare_json(_arg(args, "glare_json"), "--glare-json")
+    check_output_file(_arg(args, "glare_json"), ".json", "--glare-json")
     top = _arg(args, "falsecolor_max")
     if top is not None and not (math.isfinite(top) and top > 0):
         raise InputError(f"--falsecolor-max must be a positive luminance [cd/m2], got {top:g}")
