@@ -85,7 +85,8 @@ from ..photometry import RADIANCE_SKY_EFFICACY, RADIANCE_SUN_EFFICACY, RADIANCE_
 __all__ = [
     "Sky", "UniformSky", "CIEOvercastSky", "CIEGeneralSky", "PerezSky", "NoSky", "SKY_MODELS", "SKY_ALIASES",
     "SKY_TYPES", "CIE_GENERAL_SKY_TYPES", "PerezParameters", "sky_from_table", "hemisphere_integral",
-    "sun_vector", "perez_clearness", "perez_brightness", "perez_coefficients", "perez_luminous_efficacy",
+    "sun_vector", "perez_clearness", "perez_brightness", "perez_coefficients", "perez_coefficients_array",
+    "perez_luminous_efficacy", "perez_luminous_efficacy_array",
     "perez_from_irradiance", "perez_from_illuminance", "perez_sky", "perez_sky_from_weather",
 ]
 
@@ -527,11 +528,6 @@ PEREZ_MIN_COS_ZENITH = 0.01
 _KAPPA = 1.041
 
 
-def _clearness_bin(epsilon: float) -> int:
-    """0-based bin of the sky clearness ε (bins 1…8 of the papers)."""
-    return int(np.searchsorted(PEREZ_CLEARNESS_BINS[:7], epsilon, side="right"))
-
-
 def perez_clearness(diffuse_horizontal: float, direct_normal: float, zenith: float) -> float:
     """Sky clearness ε = ((E_dh + E_dn)/E_dh + κ Z³) / (1 + κ Z³), κ = 1.041, Z the solar
     zenith angle [°] (used in radians), irradiances in W/m² (Perez et al. 1990, eq. 1)."""
@@ -546,33 +542,49 @@ def perez_brightness(diffuse_horizontal: float, zenith: float, day: float | None
     return diffuse_horizontal * float(air_mass_kasten1966(zenith)) / extraterrestrial_normal_irradiance(day)
 
 
+def perez_coefficients_array(epsilon, delta, zenith_rad) -> np.ndarray:
+    """(5, n) a…e of Perez et al. (1993) Table 1 for n values of clearness ε, brightness Δ
+    and solar zenith angle [rad]: x = x1 + x2 Z + Δ (x3 + x4 Z), Δ raised to 0.2 in bins
+    2–5, bin 1's c and d by its own formulas (:func:`perez_coefficients` for one hour)."""
+    eps, delta, z = (np.atleast_1d(np.asarray(v, np.float64)) for v in (epsilon, delta, zenith_rad))
+    k = np.searchsorted(np.asarray(PEREZ_CLEARNESS_BINS[:7]), eps, side="right")
+    delta = np.where((eps > 1.065) & (eps < 2.8), np.maximum(delta, PEREZ_BIN2_5_MIN_BRIGHTNESS), delta)
+    x = PEREZ_1993[k]                                                   # (n, 5, 4)
+    zz, dd = z[:, None], delta[:, None]
+    coef = x[..., 0] + x[..., 1] * zz + dd * (x[..., 2] + x[..., 3] * zz)
+    first = k == 0
+    if first.any():
+        (c1, c2, c3, c4), (d1, d2, d3, d4) = PEREZ_1993[0, 2], PEREZ_1993[0, 3]
+        zf, df = z[first], delta[first]
+        coef[first, 2] = np.exp((df * (c1 + c2 * zf)) ** c3) - c4
+        coef[first, 3] = -np.exp(df * (d1 + d2 * zf)) + d3 + df * d4
+    return coef.T
+
+
 def perez_coefficients(epsilon: float, delta: float, zenith: float) -> tuple[float, float, float, float, float]:
     """(a, b, c, d, e) of the Perez (1993) luminance distribution for clearness ε,
     brightness Δ and solar zenith angle [°] (limited to 90°)."""
-    z = math.radians(min(zenith, 90.0))
-    k = _clearness_bin(epsilon)
-    if 1.065 < epsilon < 2.8:
-        delta = max(delta, PEREZ_BIN2_5_MIN_BRIGHTNESS)
-    x = PEREZ_1993[k]
-    coef = [x[i, 0] + x[i, 1] * z + delta * (x[i, 2] + x[i, 3] * z) for i in range(5)]
-    if k == 0:
-        c1, c2, c3, c4 = x[2]
-        d1, d2, d3, d4 = x[3]
-        coef[2] = math.exp((delta * (c1 + c2 * z)) ** c3) - c4
-        coef[3] = -math.exp(delta * (d1 + d2 * z)) + d3 + delta * d4
-    return tuple(float(v) for v in coef)
+    coef = perez_coefficients_array(epsilon, delta, math.radians(min(zenith, 90.0)))
+    return tuple(float(v) for v in coef[:, 0])
+
+
+def perez_luminous_efficacy_array(epsilon, delta, zenith_rad, water) -> tuple[np.ndarray, np.ndarray]:
+    """(K_diffuse, K_direct) [lm/W] of the Perez et al. (1990) model for arrays of ε, Δ,
+    solar zenith angle [rad] and precipitable water W [cm] (:func:`perez_luminous_efficacy`)."""
+    eps, delta, z, water = (np.asarray(v, np.float64) for v in (epsilon, delta, zenith_rad, water))
+    k = np.searchsorted(np.asarray(PEREZ_CLEARNESS_BINS[:7]), eps, side="right")
+    a, b, c, d = PEREZ_1990_DIFFUSE_EFFICACY[:, k]
+    k_dif = a + b * water + c * np.cos(z) + d * np.log(np.maximum(delta, PEREZ_MIN_BRIGHTNESS))
+    a, b, c, d = PEREZ_1990_DIRECT_EFFICACY[:, k]
+    k_dir = np.maximum(0.0, a + b * water + c * np.exp(5.73 * z - 5.0) + d * delta)
+    return k_dif, k_dir
 
 
 def perez_luminous_efficacy(epsilon: float, delta: float, zenith: float, water: float) -> tuple[float, float]:
     """(K_diffuse, K_direct) [lm/W] of the Perez et al. (1990) model: diffuse horizontal
     K = a + b W + c cos Z + d ln Δ and direct normal K = max(0, a + b W + c exp(5.73 Z − 5) + d Δ),
     W the precipitable water [cm], Z the solar zenith angle [°] (limited to 90°)."""
-    k = _clearness_bin(epsilon)
-    z = math.radians(min(zenith, 90.0))
-    a, b, c, d = PEREZ_1990_DIFFUSE_EFFICACY[:, k]
-    k_dif = a + b * water + c * math.cos(z) + d * math.log(max(delta, PEREZ_MIN_BRIGHTNESS))
-    a, b, c, d = PEREZ_1990_DIRECT_EFFICACY[:, k]
-    k_dir = max(0.0, a + b * water + c * math.exp(5.73 * z - 5.0) + d * delta)
+    k_dif, k_dir = perez_luminous_efficacy_array(epsilon, delta, math.radians(min(zenith, 90.0)), water)
     return float(k_dif), float(k_dir)
 
 

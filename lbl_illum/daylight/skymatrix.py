@@ -101,8 +101,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .sky import (PEREZ_1990_DIFFUSE_EFFICACY, PEREZ_1990_DIRECT_EFFICACY, PEREZ_1993, PEREZ_BIN2_5_MIN_BRIGHTNESS,
-                  PEREZ_CLEARNESS_BINS, PEREZ_MIN_BRIGHTNESS)
+from .sky import PEREZ_MIN_BRIGHTNESS, perez_coefficients_array, perez_luminous_efficacy_array
 from .solar import SOLAR_POSITION_METHODS, SolarPosition, air_mass_kasten1966, extraterrestrial_normal_irradiance, \
     precipitable_water
 from .weather import HourlyWeather, read_weather
@@ -273,9 +272,9 @@ def perez_hours(direct_normal_irradiance, diffuse_horizontal_irradiance, sun_alt
     as ``gendaymtx`` computes them (``ComputeSky``, ``CalcPerezParam``): the solar zenith
     angle Z taken within 3°…90° for all of them, ε = ((E_dh + E_dn)/E_dh + κZ³)/(1 + κZ³)
     within 1…11.9 (11.9 when E_dh = 0), Δ = E_dh m(Z)/E_0(day) within 0.01…0.6; then
-    :func:`~lbl_illum.daylight.sky.perez_luminous_efficacy` and
-    :func:`~lbl_illum.daylight.sky.perez_coefficients` of those values, whose array forms
-    these are (tests check them against each other).
+    the luminous efficacies and luminance coefficients of those values
+    (:func:`~lbl_illum.daylight.sky.perez_luminous_efficacy_array`,
+    :func:`~lbl_illum.daylight.sky.perez_coefficients_array`).
 
     Irradiances [W/m²], sun altitude [°], day of year, precipitable water [cm]: arrays of
     one length (or scalars; the results are arrays of at least one value).
@@ -290,30 +289,9 @@ def perez_hours(direct_normal_irradiance, diffuse_horizontal_irradiance, sun_alt
     eps = np.clip(eps, 1.0, MAX_CLEARNESS)
     delta = dh * air_mass_kasten1966(zenith) / extraterrestrial_normal_irradiance(np.asarray(day, dtype=np.float64))
     delta = np.clip(delta, PEREZ_MIN_BRIGHTNESS, MAX_BRIGHTNESS)
-    k = np.searchsorted(np.asarray(PEREZ_CLEARNESS_BINS[:7]), eps, side="right")
-    water = np.asarray(precipitable_water_cm, dtype=np.float64)
-    a, b, c, d = PEREZ_1990_DIFFUSE_EFFICACY[:, k]
-    k_dif = a + b * water + c * np.cos(z) + d * np.log(delta)
-    a, b, c, d = PEREZ_1990_DIRECT_EFFICACY[:, k]
-    k_dir = np.maximum(0.0, a + b * water + c * np.exp(5.73 * z - 5.0) + d * delta)
+    k_dif, k_dir = perez_luminous_efficacy_array(eps, delta, z, precipitable_water_cm)
     return PerezHours(zenith=zenith, clearness=eps, brightness=delta, diffuse_efficacy=k_dif,
-                      direct_efficacy=k_dir, coefficients=_coefficients(k, eps, delta, z))
-
-
-def _coefficients(k, eps, delta, z) -> np.ndarray:
-    """(5, hours) a…e of Perez et al. (1993) Table 1 for bins k (0-based), x = x1 + x2 Z +
-    Δ (x3 + x4 Z), Δ raised to 0.2 in bins 2–5; bin 1's c and d by its own formulas."""
-    delta = np.where((eps > 1.065) & (eps < 2.8), np.maximum(delta, PEREZ_BIN2_5_MIN_BRIGHTNESS), delta)
-    x = PEREZ_1993[k]                                                   # (hours, 5, 4)
-    zz, dd = z[:, None], delta[:, None]
-    coef = x[..., 0] + x[..., 1] * zz + dd * (x[..., 2] + x[..., 3] * zz)
-    first = k == 0
-    if first.any():
-        (c1, c2, c3, c4), (d1, d2, d3, d4) = PEREZ_1993[0, 2], PEREZ_1993[0, 3]
-        zf, df = z[first], delta[first]
-        coef[first, 2] = np.exp((df * (c1 + c2 * zf)) ** c3) - c4
-        coef[first, 3] = -np.exp(df * (d1 + d2 * zf)) + d3 + df * d4
-    return coef.T
+                      direct_efficacy=k_dir, coefficients=perez_coefficients_array(eps, delta, z))
 
 
 # ---------------------------------------------------------------------------
