@@ -255,6 +255,30 @@ class LevelRecords:
                           out_E, out_w, out_n, parallel, taper)
         return out_E, out_w, out_n
 
+    def lookup_weights(self, P, N, zone=None, taper: bool = False, pairs: int = 16):
+        """The records that serve each query and their normalised weights (Eq. 5), for
+        interpolating other values than E with the record set (the daylight coefficients
+        of :mod:`lbl_illum.engine.coefficients`): ``(record, weight)``, (n, pairs) int32
+        (-1 after the last) and float32 summing to 1 over a covered query's row (0 for a
+        query no record covers).  A query that more than ``pairs`` records serve keeps the
+        ones of largest weight (on the office example at ``draft`` a hit's lookup finds 2.3
+        on average and 9 at most)."""
+        P = np.ascontiguousarray(P, np.float64).reshape(-1, 3)
+        N = np.ascontiguousarray(N, np.float64).reshape(-1, 3)
+        n = len(P)
+        record = np.full((n, pairs), -1, np.int32)
+        weight = np.zeros((n, pairs))
+        if n and self.count and self.accuracy > 0:
+            layout = self.freeze()
+            order = octree.query_order(P, self.node_center[0], self.node_half[0]) if n >= self.SORT_MIN_QUERIES \
+                else np.arange(n)
+            parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
+            out_E, out_w, out_n = np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.int32)
+            octree.lookup(P, N, _zones(zone, n), order, layout, self._values, self.leak, False, self.anisotropic,
+                          self.accuracy, out_E, out_w, out_n, parallel, taper, pairs=(record, weight))
+        total = weight.sum(axis=1, keepdims=True)
+        return record, (weight / np.where(total > 0.0, total, 1.0)).astype(np.float32)
+
     def covers(self, P, N, zone=None) -> np.ndarray:
         """(n,) bool: whether any record serves each query — ``lookup(P, N, zone=zone)[2] > 0``,
         found faster when most queries meet few records (:func:`octree.covered`)."""

@@ -217,6 +217,13 @@ class _Pending:
     ray_t: list = field(default_factory=list)       # (r·S,) first-hit distance
     ray_dir: list = field(default_factory=list)     # (r·S, 3) direction
     cells: tuple = (1, 1)                            # (M, N) of Eq. 2 at this level
+    # daylight coefficients (Integrator.coefficients): the rays that reached the sky, by
+    # record (index into the concatenated records), sky patch and weight; and the next
+    # level's records serving each hit, (record, weight) of CoefficientRecords.pairs
+    sky_owner: list = field(default_factory=list)
+    sky_patch: list = field(default_factory=list)
+    sky_weight: list = field(default_factory=list)
+    next_pairs: tuple | None = None
 
     def cat(self, name, width=3, dtype=np.float64):
         """The parts of ``name`` as one array (concatenated once, then kept)."""
@@ -348,6 +355,9 @@ class Integrator:
         #: in which stopping waits), ``save(cache)`` (returns the records per level kept)
         #: and ``name``; a cache file is one (:func:`lbl_illum.io.cachefile.attach_cache_file`).
         self.keeper = None
+        #: daylight coefficients carried beside the records' irradiance (None: not), a
+        #: :class:`lbl_illum.engine.coefficients.CoefficientRecords`
+        self.coefficients = None
 
     # -- the lighting context, read-only ------------------------------------------------
     scene = property(lambda self: self.context.scene, doc="The scene (lengths in metres).")
@@ -393,14 +403,14 @@ class Integrator:
         return default_spacing(self.tracer, points, normals, spacing_rng(self.options.seed))
 
     # -- hemisphere rays ----------------------------------------------------------------
-    def trace_paths(self, origins, directions, rng, through=None, portal_mis=None):
+    def trace_paths(self, origins, directions, rng, through=None, portal_mis=None, escapes=False):
         """Follow rays through specular surfaces to the sky, a light or a diffuse surface,
         with the portal weights of ``portal_mis`` if given:
         :func:`lbl_illum.engine.portal_sampling.trace_hemisphere_rays` on this integrator's
         lighting context, which says what the arguments and the returned
         ``(first_t, radiance, hits, mis)`` are."""
         return trace_hemisphere_rays(self.context, origins, directions, rng, through=through,
-                                     portal_mis=portal_mis)
+                                     portal_mis=portal_mis, escapes=escapes)
 
     # -- placement (top-down) ---------------------------------------------------------
     def _evaluate_hemispheres(self, k, q: _Queries, pending: _Pending, rng, run: RunPlan):
@@ -427,8 +437,13 @@ class Integrator:
         inside, n_p = (None, 0) if path_level else portal_sample_plan(self.context, P, S)
         per_ray = np.repeat(np.where(np.isin(np.arange(r), inside), n_p, 0), S) if n_p else None
         mis = (np.repeat(Ns, S, axis=0), S, per_ray) if n_p else None
-        first_t, radiance, hits, ray_mis = self.trace_paths(origins, dirs, rng, portal_mis=mis)
+        dc = self.coefficients
+        first_t, radiance, hits, ray_mis = self.trace_paths(origins, dirs, rng, portal_mis=mis, escapes=dc is not None)
         known = (radiance * ray_mis[:, None]).reshape(r, S, 3).sum(axis=1)
+        first = sum(len(x) for x in pending.samples)      # records traced before these
+        if dc is not None:
+            sky = hits["sky_ray"]
+            dc.add_sky(pending, first + sky // S, hits["sky_dir"], hits["sky_through"] * ray_mis[sky, None])
         owner_local = hits["ray"] // S
         ray_base = sum(len(x) for x in pending.ray_t)
         hit_ray = hits["ray"] + ray_base
@@ -442,8 +457,10 @@ class Integrator:
             pending.cells = (m, n)
         if n_p:
             p_known, p_hits, p_owner = portal_samples(self.context, P[inside], Ns[inside], Ng[inside], S, n_p,
-                                                      rng, base[inside])
+                                                      rng, base[inside], escapes=dc is not None)
             known[inside] += p_known
+            if dc is not None:
+                dc.add_sky(pending, first + inside[p_hits["sky_owner"]], p_hits["sky_dir"], p_hits["sky_weight"])
             p_owner = inside[p_owner]
             hits = {key: np.concatenate([hits[key], p_hits[key]]) for key in ("P", "Ns", "Ng")}
             hit_weight = np.concatenate([hit_weight, p_hits["weight"]])
@@ -462,12 +479,11 @@ class Integrator:
                 hits = {key: hits[key][keep] for key in ("P", "Ns", "Ng")}
                 owner_local, hit_ray = owner_local[keep], hit_ray[keep]
                 pending.hit_importance.append(child)
-            base = sum(len(x) for x in pending.samples)      # records traced before these
             pending.hit_P.append(hits["P"])
             pending.hit_Ns.append(hits["Ns"].astype(np.float32))
             pending.hit_Ng.append(hits["Ng"].astype(np.float32))
             pending.hit_weight.append(hit_weight.astype(np.float32))
-            pending.hit_owner.append((owner_local + base).astype(np.int32))
+            pending.hit_owner.append((owner_local + first).astype(np.int32))
             pending.hit_ray.append(hit_ray.astype(np.int32))
         pending.known.append(known)
         pending.samples.append(np.full(r, S))
@@ -614,6 +630,8 @@ class Integrator:
                                np.zeros((0, 3)) if ray_L is None else ray_L)
                 self._tick(run)
         lv.E[records] = (np.pi / S)[:, None] * known
+        if self.coefficients is not None:
+            self.coefficients.evaluate(k, records, S, pending)
         if ray_L is not None:
             m, n = pending.cells
             r = len(records)
@@ -682,6 +700,8 @@ class Integrator:
             run.block_stack[-1][0] = b + 1.0           # the block's levels below are solved
             self._tick(run, f"evaluating level {k}{where}")
             next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
+            if self.coefficients is not None and deeper:
+                pending.next_pairs = self.coefficients.pairs(k + 1, hP, pending.cat("hit_Ns"), own_next)
             self.evaluate_level(k, pending, next_answer, run)
             self._close_block(k, run)
         run.block_stack.pop()

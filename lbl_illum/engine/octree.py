@@ -412,7 +412,7 @@ def _sector_open(mask, dx, dy, dz, mx, my, mz, Ri):
 
 
 def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, taper, V, leak, perm, pos, nr, box,
-            level_start, packet_extent, out_E, out_w, out_n):
+            level_start, packet_extent, out_E, out_w, out_n, pair_record, pair_weight):
     """Eq. 5 at each query ``order[k]``, the queries split into ``n_blocks`` runs (one
     per parallel task), each with its own buffers.
 
@@ -432,7 +432,12 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, taper, V, 
     summed in order; with ``taper`` the weights 1 − ε_i/a).  Records are met in layout order whatever the packet, so each
     answer depends on its query alone.  Everything is written out in one function: a
     call per query or per chunk would cost two atomic reference counts per array argument.
+
+    Pairs.  When ``pair_record`` has columns (K of them), each query's valid records and
+    their weights are also written there, in layout order, -1 and 0 after the last; a
+    query served by more than K records keeps the K of largest weight.
     """
+    pairs = pair_record.shape[1]
     nq = order.shape[0]
     n_levels = level_start.shape[0] - 1
     root = level_start[n_levels - 1]             # the top level's group; the root is lane 0
@@ -512,6 +517,7 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, taper, V, 
                 s1 = 0.0
                 s2 = 0.0
                 count = 0
+                written = 0
                 n_cand = 0
                 gi = 0
                 mask = 0
@@ -598,6 +604,19 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, taper, V, 
                                      + V[i, 5, 0] * dx + V[i, 5, 1] * dy + V[i, 5, 2] * dz)
                             e2 = max(0.0, e2 + V[i, 3, 0] * cx + V[i, 3, 1] * cy + V[i, 3, 2] * cz
                                      + V[i, 6, 0] * dx + V[i, 6, 1] * dy + V[i, 6, 2] * dz)
+                        if pairs > 0:
+                            if written < pairs:
+                                pair_record[q, written] = i
+                                pair_weight[q, written] = w
+                                written += 1
+                            else:                       # full: replace the smallest
+                                low = 0
+                                for t in range(1, pairs):
+                                    if pair_weight[q, t] < pair_weight[q, low]:
+                                        low = t
+                                if w > pair_weight[q, low]:
+                                    pair_record[q, low] = i
+                                    pair_weight[q, low] = w
                         sw += w
                         s0 += w * e0
                         s1 += w * e1
@@ -608,6 +627,9 @@ def _lookup(qP, qN, qZ, order, n_blocks, accuracy, gradients, shaped, taper, V, 
                         break
                 out_w[q] = sw
                 out_n[q] = count
+                for t in range(written, pairs):
+                    pair_record[q, t] = -1
+                    pair_weight[q, t] = 0.0
                 if sw > 0.0:
                     out_E[q, 0] = s0 / sw
                     out_E[q, 1] = s1 / sw
@@ -703,7 +725,7 @@ def covered(qP, qN, qZ, layout: Layout, V, leak, shaped, accuracy, out, parallel
 
 
 def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accuracy, out_E, out_w, out_n, parallel,
-           taper=False):
+           taper=False, pairs=None):
     """Interpolate (Eq. 5) the records valid at each query on a :func:`freeze` layout.
 
     qP, qN : (q, 3) float64 query positions [m] and unit normals
@@ -735,12 +757,19 @@ def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accura
     in an image, and a peak at each record; the ramp leaves the average continuous.  (The
     renderer asks for it without ``gradients``: :meth:`lbl_illum.engine.integrator.Integrator.compute`.)  Images use it (:meth:`lbl_illum.engine.integrator.Integrator.compute`'s
     ``taper``); sensor values keep the paper's weights.
+
+    ``pairs = (record, weight)``, (q, K) int32 and float64: each query's records and their
+    weights w_i (not normalised), -1 and 0 after the last (the K largest if more serve it),
+    for callers that interpolate other values with the same weights (daylight
+    coefficients: :mod:`lbl_illum.engine.coefficients`).
     """
+    if pairs is None:
+        pairs = (np.zeros((0, 0), np.int32), np.zeros((0, 0)))
     # a few blocks per thread: each block allocates its own buffers (the list of
     # level-1 boxes is sized for all of them)
     n_blocks = min(len(qP) // 256 + 1, 8 * numba.get_num_threads()) if parallel else 1
     shared = (accuracy, bool(gradients), bool(shaped), bool(taper), V, leak, layout.perm, layout.pos, layout.nr, layout.box,
-              layout.level_start, float(layout.packet_extent), out_E, out_w, out_n)
+              layout.level_start, float(layout.packet_extent), out_E, out_w, out_n, *pairs)
     if n_blocks == 1:
         _lookup_kernel(qP, qN, qZ, order, 1, *shared)
         return

@@ -123,6 +123,12 @@ class Paths:
     Ng: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     weight: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     rays: int = 0
+    #: with ``escapes``: the rays that reached the sky or the ground glow — (e,) the ray,
+    #: (e, 3) its direction there and (e, 3) its throughput (what the sky's luminance in
+    #: that direction was multiplied by)
+    sky_ray: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    sky_dir: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    sky_through: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
 def _add(out, index, values, repeated: bool) -> None:
@@ -138,7 +144,7 @@ def _add(out, index, values, repeated: bool) -> None:
 
 def follow_paths(context: LightingContext, origins, directions, rng: np.random.Generator, policy: PathPolicy,
                  through=None, tmax=None, portal_weights: PortalWeights | None = None, reach=None,
-                 progress=None) -> Paths:
+                 progress=None, escapes: bool = False) -> Paths:
     """Follow n rays from ``origins`` [m] in unit ``directions`` until they escape, meet an
     emitter or end at diffuse surfaces, through at most :data:`MAX_SPECULAR_DEPTH`
     specular events (the module docstring gives the stages).
@@ -150,6 +156,8 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
     reach : (n,) samples on openings: a ray that meets a surface before ``reach`` [m]
         is dropped (its weight set to 0 by ``portal_weights``)
     progress : receives ``update(rays)`` after every depth
+    escapes : also return where each ray reached the sky and with what throughput
+        (:attr:`Paths.sky_ray`; the daylight coefficients bin them by sky patch)
     """
     mats = context.materials
     tracer = context.tracer
@@ -166,7 +174,7 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
     through = np.ones((n, 3)) if unit else np.array(through, np.float64)
     reflected = np.zeros(n, bool)   # a reflection happened on the way
     sun_done = np.zeros(n, bool)    # the sun's disk was taken by a highlight's shadow ray
-    out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight")}
+    out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight", "sky_ray", "sky_dir", "sky_through")}
     rays = 0
     for depth in range(MAX_SPECULAR_DEPTH + 1):
         if len(ray) == 0:
@@ -205,6 +213,10 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             if policy.sun_disk and sun is not None:
                 L[sun.within_disk(d[esc]) & ~sun_done[esc]] += sun.luminance
             _add(radiance, ray[esc], through[esc] * L, split)
+            if escapes:
+                out["sky_ray"].append(ray[esc])
+                out["sky_dir"].append(d[esc])
+                out["sky_through"].append(through[esc])
         hit = np.flatnonzero(reached)
         if len(hit) == 0:
             break
@@ -268,6 +280,9 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
     if out["ray"]:
         paths.ray, paths.P, paths.Ns, paths.Ng, paths.weight = (np.concatenate(out[k]) for k in
                                                                  ("ray", "P", "Ns", "Ng", "weight"))
+    if out["sky_ray"]:
+        paths.sky_ray, paths.sky_dir, paths.sky_through = (np.concatenate(out[k]) for k in
+                                                           ("sky_ray", "sky_dir", "sky_through"))
     return paths
 
 

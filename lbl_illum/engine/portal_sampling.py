@@ -191,7 +191,8 @@ class PortalBalanceWeights:
         self.weight[r] = hemisphere_weight(self.normals[r], d, density, self.S, self.n_p[r])
 
 
-def trace_hemisphere_rays(context: LightingContext, origins, directions, rng, through=None, portal_mis=None):
+def trace_hemisphere_rays(context: LightingContext, origins, directions, rng, through=None, portal_mis=None,
+                          escapes: bool = False):
     """Follow rays through specular surfaces to the sky, a light or a diffuse surface
     (:func:`~lbl_illum.engine.paths.follow_paths` with the ``HEMISPHERE`` policy).
 
@@ -212,17 +213,21 @@ def trace_hemisphere_rays(context: LightingContext, origins, directions, rng, th
     sky), (n, 3) radiance already known (sky, lights seen by reflection), the diffuse
     hits as a dict of arrays ``ray, P, Ns, Ng, weight`` (weight = throughput ρ/π),
     and (n,) the MIS weight of each ray (1 unless it went through a portal), which
-    the radiance and hit weights do not include.
+    the radiance and hit weights do not include.  With ``escapes`` the hits also hold
+    ``sky_ray, sky_dir, sky_through``: the rays that reached the sky, where and with what
+    throughput (:class:`~lbl_illum.engine.paths.Paths`).
     """
     weights = None if portal_mis is None else PortalBalanceWeights(context, len(origins), *portal_mis)
     paths = follow_paths(context, origins, directions, rng, HEMISPHERE, through=through,
-                         portal_weights=weights)
+                         portal_weights=weights, escapes=escapes)
     hits = {"ray": paths.ray, "P": paths.P, "Ns": paths.Ns, "Ng": paths.Ng, "weight": paths.weight}
+    if escapes:
+        hits.update(sky_ray=paths.sky_ray, sky_dir=paths.sky_dir, sky_through=paths.sky_through)
     mis_weight = weights.weight if weights is not None else np.ones(len(origins))
     return paths.first_t, paths.radiance, hits, mis_weight
 
 
-def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=None):
+def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=None, escapes: bool = False):
     """Light through the portals seen from (P, Ns): the paper's §5 advice that large
     sources belong in the indirect step, sampled well.
 
@@ -247,7 +252,9 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
 
     Returns ``(known, hits, owner)`` like the hemisphere part: (r, 3) radiance sums
     known at trace time, the diffuse hits (``P, Ns, Ng, weight``, the weight including
-    the sample's MIS factor) and (m,) the point each hit belongs to.
+    the sample's MIS factor) and (m,) the point each hit belongs to.  With ``escapes``
+    the hits also hold ``sky_owner, sky_dir, sky_weight``: each sample that reached the
+    sky, its point, direction there and throughput times its MIS factor.
     """
     tracer = context.tracer
     r = len(P)
@@ -263,6 +270,7 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
     known = np.zeros((r, 3))
     keys = ("P", "Ns", "Ng", "weight")
     parts, owners = [], []
+    sky = {"sky_owner": [], "sky_dir": [], "sky_weight": []}
 
     def add(use, radiance, p_hits, weight):
         for c in range(3):
@@ -271,6 +279,10 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
             parts.append({**{key: p_hits[key] for key in keys[:3]},
                           "weight": p_hits["weight"] * weight[p_hits["ray"], None]})
             owners.append(owner[use][p_hits["ray"]])
+        if escapes and len(p_hits["sky_ray"]):
+            sky["sky_owner"].append(owner[use][p_hits["sky_ray"]])
+            sky["sky_dir"].append(p_hits["sky_dir"])
+            sky["sky_weight"].append(p_hits["sky_through"] * weight[p_hits["sky_ray"], None])
 
     # portal glass and translucent sheets: the triangle drawn on must be the first surface met
     use = np.flatnonzero(usable & (target >= 0))
@@ -286,7 +298,8 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
             # face (τ/π), as any ray that meets it does (paths.py)
             sheet = context.translucent_portal[sub.prim]
             if sheet.any():
-                _, radiance, p_hits, _ = trace_hemisphere_rays(context, o[use[sheet]], w[use[sheet]], rng)
+                _, radiance, p_hits, _ = trace_hemisphere_rays(context, o[use[sheet]], w[use[sheet]], rng,
+                                                               escapes=escapes)
                 add(use[sheet], radiance, p_hits, weight[sheet])
             # glass: through the pane at τ(θ), on like any ray
             pane = ~sheet
@@ -296,15 +309,22 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
                 cos_p = np.einsum("ij,ij->i", tracer.normals[sub.prim], w[use])
                 tau = context.materials.glass_transmittance(context.scene.triangles.material[sub.prim], cos_p)
                 _, radiance, p_hits, _ = trace_hemisphere_rays(context, tracer.offset(Pp, -Ngp), w[use], rng,
-                                                               through=tau)
+                                                               through=tau, escapes=escapes)
                 add(use, radiance, p_hits, weight)
     # openings: unobstructed up to the point drawn, then on like any ray
     use = np.flatnonzero(usable & (target < 0))
     if len(use):
         _, radiance, p_hits, weight = trace_hemisphere_rays(context, o[use], w[use], rng,
-                                                            portal_mis=(Ns[owner[use]], S, n_p, dist[use]))
+                                                            portal_mis=(Ns[owner[use]], S, n_p, dist[use]),
+                                                            escapes=escapes)
         add(use, radiance, p_hits, weight)
+    if escapes:
+        escaped = {key: np.concatenate(v) if v else np.zeros((0, 3) if key != "sky_owner" else 0)
+                   for key, v in sky.items()}
+        escaped["sky_owner"] = escaped["sky_owner"].astype(np.int64)
+    else:
+        escaped = {}
     if not parts:
-        return known, {key: np.zeros((0, 3)) for key in keys}, np.zeros(0, np.int64)
+        return known, {**{key: np.zeros((0, 3)) for key in keys}, **escaped}, np.zeros(0, np.int64)
     hits = {key: np.concatenate([part[key] for part in parts]) for key in keys}
-    return known, hits, np.concatenate(owners)
+    return known, {**hits, **escaped}, np.concatenate(owners)

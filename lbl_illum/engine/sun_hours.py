@@ -28,39 +28,73 @@ import numpy as np
 
 from ..photometry import luminance
 
-__all__ = ["direct_sun_matrix", "MAX_BATCH"]
+__all__ = ["direct_sun_matrix", "sun_visibility", "MAX_BATCH"]
 
 #: Most shadow rays traced in one call (bounds the temporaries).
 MAX_BATCH = 1 << 20
 
 
-def direct_sun_matrix(direct, tracer, points, normals, sun_directions, direct_normal) -> np.ndarray:
-    """(points, hours) float32 direct-sun illuminance [lux] (module docstring).
+def sun_visibility(direct, tracer, points, normals, sun_directions, origins=None, rgb: bool = False,
+                   pairs=None) -> np.ndarray:
+    """(points, suns) float32 max(0, N_i · s) T_i(s): the direct illuminance [lux] at each
+    point per lux of direct normal illuminance from each sun direction ``s`` (module
+    docstring); ``rgb``: (points, 3, suns), T per channel, else its photometric value.
 
     direct : the :class:`~lbl_illum.engine.direct.DirectLight` of an integrator (its glass
         model gives τ(θ));  tracer : its :class:`~lbl_illum.engine.raycast.Tracer`
-    points, normals : (n, 3) sensor positions [m] and unit normals
-    sun_directions : (h, 3) unit vectors to the sun (x east, y north, z up)
-    direct_normal : (h,) direct normal illuminance [lux]; hours with the sun below the
-        horizon or no direct light are zero columns
+    points, normals : (n, 3) positions [m] and unit normals;  origins : (n, 3) where the
+        shadow rays start (default: the sensors' own origins, :meth:`Tracer.sensor_origins`)
+    sun_directions : (h, 3) unit vectors to the sun (x east, y north, z up); those at or
+        below the horizon give zero columns
+    pairs : (point, sun) index arrays of the only pairs to trace (the others are zero;
+        the caller knows them dark), else every pair with N · s > 0
     """
     points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
     normals = np.asarray(normals, np.float64).reshape(-1, 3)
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     s = np.asarray(sun_directions, np.float64).reshape(-1, 3)
-    e_dn = np.asarray(direct_normal, np.float64).reshape(-1)
-    if len(s) != len(e_dn):
-        raise ValueError(f"{len(s)} sun directions for {len(e_dn)} hours")
-    out = np.zeros((len(points), len(s)), np.float32)
-    up = np.flatnonzero((s[:, 2] > 0.0) & (e_dn > 0.0))
+    out = np.zeros((len(points), 3, len(s)) if rgb else (len(points), len(s)), np.float32)
+    up = np.flatnonzero(s[:, 2] > 0.0)
     if len(points) == 0 or len(up) == 0:
         return out
     s_up = s[up] / np.linalg.norm(s[up], axis=1, keepdims=True)
-    origins = tracer.sensor_origins(points, normals)
-    cos = normals @ s_up.T                                   # (n, hours up)
-    point, hour = np.nonzero(cos > 0.0)
+    if origins is None:
+        origins = tracer.sensor_origins(points, normals)
+    cos = normals @ s_up.T                                   # (n, suns up)
+    if pairs is None:
+        point, sun = np.nonzero(cos > 0.0)
+    else:
+        rank = np.full(len(s), -1)
+        rank[up] = np.arange(len(up))
+        point, sun = np.asarray(pairs[0]), rank[np.asarray(pairs[1])]
+        keep = sun >= 0
+        point, sun = point[keep], sun[keep]
+        keep = cos[point, sun] > 0.0
+        point, sun = point[keep], sun[keep]
     for start in range(0, len(point), MAX_BATCH):
-        p, k = point[start:start + MAX_BATCH], hour[start:start + MAX_BATCH]
-        T = luminance(direct.transmittance(origins[p], s_up[k]))
-        out[p, up[k]] = (e_dn[up[k]] * cos[p, k] * T).astype(np.float32)
+        p, k = point[start:start + MAX_BATCH], sun[start:start + MAX_BATCH]
+        T = direct.transmittance(origins[p], s_up[k])
+        if rgb:
+            out[p, :, up[k]] = (cos[p, k, None] * T).astype(np.float32)
+        else:
+            out[p, up[k]] = (cos[p, k] * luminance(T)).astype(np.float32)
+    return out
+
+
+def direct_sun_matrix(direct, tracer, points, normals, sun_directions, direct_normal) -> np.ndarray:
+    """(points, hours) float32 direct-sun illuminance [lux] (module docstring).
+
+    direct, tracer, points, normals : as :func:`sun_visibility`
+    sun_directions : (h, 3) unit vectors to the sun (x east, y north, z up)
+    direct_normal : (h,) direct normal illuminance [lux]; hours with the sun below the
+        horizon or no direct light are zero columns
+    """
+    s = np.asarray(sun_directions, np.float64).reshape(-1, 3)
+    e_dn = np.asarray(direct_normal, np.float64).reshape(-1)
+    if len(s) != len(e_dn):
+        raise ValueError(f"{len(s)} sun directions for {len(e_dn)} hours")
+    out = np.zeros((len(np.asarray(points).reshape(-1, 3)), len(s)), np.float32)
+    up = np.flatnonzero((s[:, 2] > 0.0) & (e_dn > 0.0))
+    if len(up):
+        out[:, up] = sun_visibility(direct, tracer, points, normals, s[up]) * e_dn[up].astype(np.float32)
     return out
