@@ -64,18 +64,19 @@ def _studies():
     return lbl_illum_studies
 
 
-def _add_quality_options(p) -> None:
-    """The quality options shared by ``illuminance`` and ``daylight-factor``; the defaults
-    shown are what a run uses when neither the command line nor the scene's ``[settings]``
-    sets an option: :data:`~lbl_illum.options.DEFAULT_PRESET`'s values, read from
-    :data:`~lbl_illum.options.PRESETS` (the others from :class:`~lbl_illum.options.Options`)."""
-    d = Options().with_preset(DEFAULT_PRESET)
-    q = p.add_argument_group("quality", textwrap.fill(
+def _add_quality_options(p, preset: str = DEFAULT_PRESET, text: str | None = None) -> None:
+    """The quality options shared by the commands that compute; the defaults shown are what
+    a run uses when neither the command line nor the scene's ``[settings]`` sets an option:
+    ``preset``'s values (:data:`~lbl_illum.options.DEFAULT_PRESET` unless the command has
+    its own, ``annual``'s), read from :data:`~lbl_illum.options.PRESETS` (the others from
+    :class:`~lbl_illum.options.Options`)."""
+    d = Options().with_preset(preset)
+    q = p.add_argument_group("quality", textwrap.fill(text or (
         "An option not given here comes from the scene's [settings], else from the "
-        f"'{DEFAULT_PRESET}' preset: its values are the defaults shown.", 88))
+        f"'{preset}' preset: its values are the defaults shown."), 88))
     q.add_argument("--preset", choices=tuple(PRESETS), metavar="NAME",
                    help=f"quality preset: {', '.join(PRESETS)} (see below; options given here win over it; "
-                        f"default {DEFAULT_PRESET})")
+                        f"default {preset})")
     q.add_argument("--accuracy", type=_finite(0.0), metavar="A",
                    help=f"the paper's a (default {d.accuracy:g}; 0 = no interpolation)")
     q.add_argument("--bounces", type=_whole(0, MAX_BOUNCES), metavar="N",
@@ -220,6 +221,21 @@ def _build_parser() -> argparse.ArgumentParser:
                                        "-vth, with its VIEW= line) as Radiance's evalglare computes them: vertical "
                                        "illuminance, glare sources, position index, DGP (low-light corrected), DGI, "
                                        "UGR and the EN 17037 class; see docs/glare.md."))
+
+    from .annual import ANNUAL_PRESET, add_annual_arguments
+    a = sub.add_parser("annual", help="a year of daylight at sensor points: DA, sDA, ASE, UDI, LEED, EN 17037",
+                       description=textwrap.fill(
+                           "Compute the illuminance at the sensor points for every hour of a weather file (8760 "
+                           "rows, .epw or .wea) from daylight coefficients carried by the irradiance cache's "
+                           "records, with the direct sun traced hour by hour, and the annual metrics of IES LM-83 "
+                           "(sDA, ASE), UDI, LEED v4.1 and EN 17037.  Writes OUTDIR/illuminance.npy and "
+                           "direct_sun.npy (float32, points x 8760, lux), points.csv, summary.json and PNG plans; "
+                           "see docs/annual.md.", 88),
+                       epilog=QUALITY_HELP + preset_table(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_annual_arguments(a)
+    _add_quality_options(a, ANNUAL_PRESET, text=(
+        f"The preset (default '{ANNUAL_PRESET}') replaces the quality keys of the scene's [settings]; an option given "
+        "here wins over both.  The defaults shown are the preset's."))
 
     try:
         STUDIES = _studies().STUDIES
@@ -721,6 +737,9 @@ def main(argv=None) -> int:
         if args.command == "glare":
             from .glare import glare_command
             return glare_command(args)
+        if args.command == "annual":
+            from .annual import annual_command
+            return annual_command(args)
         if args.command == "validate":
             return _run_validate(args)
         if args.command == "export":

@@ -110,7 +110,7 @@ from ..errors import InputError
 __all__ = [
     "SkyPatches", "SkyMatrix", "sky_patches", "patch_index", "sky_matrix", "perez_hours", "PerezHours",
     "gendaymtx_solar_position", "TREGENZA_BANDS", "SUN_OPTIONS", "VALUE_OPTIONS", "GENDAYMTX_DEW_POINT",
-    "SUN_PATCHES",
+    "SUN_PATCHES", "sun_patch_weights",
 ]
 
 #: Patches per band of the Tregenza sky, from the horizon up (the zenith cap apart).
@@ -539,12 +539,21 @@ def sky_matrix(weather: HourlyWeather | str | Path, mf: int = 1, sun: str = "pat
                      sun_illuminance=dn_lux.copy() if sun == "separate" else np.zeros(n_hours))
 
 
-def _add_sun(luminance: np.ndarray, hours: np.ndarray, cos_theta: np.ndarray, direct_normal: np.ndarray,
-             omega: np.ndarray) -> None:
-    """Spread each hour's direct normal illuminance over the :data:`SUN_PATCHES` sky patches
-    nearest the sun (``cos_theta``: (hours, sky patches) cosines of the centres' angles from
-    it), weights 1 / (1.002 − cos θ), luminance += w E_dn / (Σw Ω) (``gendaymtx``, ``AddDirect``)."""
+def sun_patch_weights(cos_theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The :data:`SUN_PATCHES` sky patches nearest each sun and their shares of it:
+    ``cos_theta`` (hours, sky patches) are the cosines of the angles between the suns and
+    the sky patches' centres; returns ``(near, share)``, (hours, 4) indices among the sky
+    patches (row − 1) and weights summing to 1, w ∝ 1 / (1.002 − cos θ) (``gendaymtx``,
+    ``AddDirect``)."""
     near = np.argpartition(-cos_theta, SUN_PATCHES - 1, axis=1)[:, :SUN_PATCHES]   # (hours, 4)
     w = 1.0 / (SUN_WEIGHT_OFFSET - np.take_along_axis(cos_theta, near, axis=1))
-    share = w / w.sum(axis=1, keepdims=True) * direct_normal[:, None]
-    luminance[1 + near, hours[:, None]] += share / omega[near]
+    return near, w / w.sum(axis=1, keepdims=True)
+
+
+def _add_sun(luminance: np.ndarray, hours: np.ndarray, cos_theta: np.ndarray, direct_normal: np.ndarray,
+             omega: np.ndarray) -> None:
+    """Spread each hour's direct normal illuminance over the sky patches nearest the sun
+    (:func:`sun_patch_weights`; ``cos_theta``: (hours, sky patches)), luminance += w E_dn
+    / Ω (``gendaymtx``, ``AddDirect``)."""
+    near, share = sun_patch_weights(cos_theta)
+    luminance[1 + near, hours[:, None]] += share * direct_normal[:, None] / omega[near]

@@ -1,0 +1,199 @@
+"""``lbl-illum annual``: a year of daylight at a sensor grid from the cache's daylight
+coefficients, and the annual metrics of IES LM-83, LEED v4.1 and EN 17037.
+
+The command's side of :mod:`lbl_illum.engine.annual_light` (the light) and
+:mod:`lbl_illum.workplane.annual` (the metrics): its arguments, the checks made before
+any work, the files of OUTDIR (each written whole or not at all) and the one line it
+prints.  See docs/annual.md.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from ..errors import InputError
+from .shared import finite, run_options
+
+__all__ = ["add_annual_arguments", "annual_command", "ANNUAL_PRESET", "OUTPUT_FILES", "PLOT_FILES"]
+
+#: The preset of an annual run unless ``--preset`` names another: the metrics count hours
+#: above thresholds, where draft's 0.6 % mean error on the office example changes nothing.
+ANNUAL_PRESET = "draft"
+#: What OUTDIR receives (the plots only with matplotlib, unless --no-plots).
+OUTPUT_FILES = ("illuminance.npy", "direct_sun.npy", "points.csv", "summary.json")
+PLOT_FILES = ("da.png", "sda.png", "ase.png", "day_hour.png")
+#: Rows of the year the metrics are defined on.
+YEAR_ROWS = 8760
+
+
+def add_annual_arguments(parser) -> None:
+    """Arguments of ``lbl-illum annual`` (the quality options are added by the caller)."""
+    parser.add_argument("scene", help="scene file (.toml); its [sky] and [sun] are set aside")
+    parser.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts, optional area name "
+                        "column: areas get their own figures)")
+    parser.add_argument("--weather", required=True, metavar="FILE", help="weather file of a year, 8760 rows: "
+                        "EnergyPlus .epw or Radiance/DAYSIM .wea")
+    parser.add_argument("-o", "--output", required=True, metavar="OUTDIR",
+                        help=f"folder for {', '.join(OUTPUT_FILES)} and the plots (created if missing)")
+    parser.add_argument("--weather-values", choices=("irradiance", "illuminance"), default="irradiance",
+                        help="what sets each hour's brightness: the direct and diffuse irradiance through the Perez "
+                             "efficacies, as gendaymtx (default), or an EPW's own illuminance columns")
+    parser.add_argument("--sky-subdivision", type=int, choices=(1, 2, 4), default=1, metavar="MF",
+                        help="sky patches: 1 = Tregenza 145 + ground (default), 2 or 4 = Reinhart (577, 2305)")
+    parser.add_argument("--ground-reflectance", type=finite(0.0, 1.0), metavar="R",
+                        help="reflectance of the ground glow below the horizon (default: the scene's [sky] value, "
+                             "else 0.2)")
+    o = parser.add_argument_group("occupancy and metrics")
+    o.add_argument("--schedule", metavar="FILE", help="occupancy, one value 0..1 per row of the year (default: "
+                   "IES LM-83, 8:00-18:00 every day)")
+    o.add_argument("--dst", choices=("us", "eu"), help="with the LM-83 hours: clocks one hour ahead in summer "
+                   "(US or EU rule, the weather file's year)")
+    o.add_argument("--threshold", type=finite(0.0, above=True), default=300.0, metavar="LUX",
+                   help="daylight autonomy threshold (default 300, LM-83's sDA300/50%%)")
+    o.add_argument("--healthcare", action="store_true", help="LEED v4.1 points of the Healthcare column")
+    o.add_argument("--area", metavar="NAME", help="the area whose mean the day x hour map shows (default: all points)")
+    o.add_argument("--no-plots", action="store_true", help="no PNG plots (they need matplotlib)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress display and no summary line")
+
+
+def _check(args) -> None:
+    """Everything that can be refused before any work."""
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"-o {args.output}: is a file; give a folder")
+    if not out.exists() and not out.resolve().parent.is_dir():
+        raise InputError(f"-o {args.output}: folder {out.parent} does not exist")
+    if args.dst and args.schedule:
+        raise InputError("--dst goes with the LM-83 hours, not with --schedule (give the schedule in clock time)")
+
+
+def _plots_wanted(args) -> bool:
+    """Whether to draw the plots: asked for and matplotlib at hand (said once if not)."""
+    if args.no_plots:
+        return False
+    from ..optional import available
+
+    if available("matplotlib"):
+        return True
+    if not args.quiet:
+        print("lbl-illum: note: matplotlib is not installed: no plots (pip install matplotlib, or --no-plots)",
+              file=sys.stderr)
+    return False
+
+
+def annual_command(args) -> int:
+    """``lbl-illum annual``: compute, write OUTDIR, print one line; 0."""
+    import numpy as np
+
+    from ..daylight.skymatrix import sky_matrix
+    from ..daylight.weather import read_weather
+    from ..engine.annual_light import annual_light
+    from ..io.files import atomic_write_bytes, atomic_write_text
+    from ..io.points import read_points
+    from ..scene.scenefile import load_scene
+    from ..workplane import annual as metrics
+    from ..workplane.metrics import readable
+    from .progress import ProgressBar, compile_notice
+
+    t0 = time.perf_counter()
+    _check(args)
+    plots = _plots_wanted(args)
+    scene = load_scene(args.scene)
+    points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
+    if args.area is not None and args.area not in set(areas.tolist()):
+        raise InputError(f"--area {args.area}: no point of {Path(args.points).name} is in that area")
+    weather = read_weather(args.weather)
+    if len(weather) != YEAR_ROWS:
+        raise InputError(f"{Path(args.weather).name}: {len(weather)} rows; the annual metrics need the {YEAR_ROWS} "
+                         "hours of a 365-day year")
+    if args.schedule:
+        occupancy = metrics.read_schedule(args.schedule)
+    else:
+        occupancy = metrics.lm83_occupancy(dst=args.dst, year=weather.year if args.dst else None)
+    rho_g = args.ground_reflectance if args.ground_reflectance is not None else scene.sky.ground_reflectance
+    try:
+        matrix = sky_matrix(weather, mf=args.sky_subdivision, sun="separate", values=args.weather_values,
+                            ground_reflectance=rho_g)
+    except ValueError as exc:
+        raise InputError(f"{Path(args.weather).name}: {exc}") from None
+    if not (matrix.daylight & (occupancy > 0)).any():
+        raise InputError(f"{Path(args.weather).name}: the sun is never up in an occupied hour at this site "
+                         f"(latitude {weather.site.latitude:g})")
+    if not args.preset:
+        args.preset = ANNUAL_PRESET
+    options = run_options(scene, args)
+    if not args.quiet:
+        print(f"lbl-illum: note: the year's skies replace the scene's [sky] and [sun]; quality preset "
+              f"'{args.preset}'", file=sys.stderr)
+        for warning in scene.warnings:
+            print(f"lbl-illum: warning: {warning}", file=sys.stderr)
+    bar = ProgressBar(enabled=not args.quiet)
+    try:
+        with compile_notice(enabled=not args.quiet, bar=bar):
+            light = annual_light(scene, points, normals, weather, options, ground_reflectance=rho_g, progress=bar,
+                                 matrix=matrix)
+    finally:
+        bar.close()
+    daylight_hours = metrics.en17037_daylight_hours(
+        diffuse_horizontal=np.where(matrix.daylight, matrix.diffuse_horizontal_illuminance, np.nan))
+    result = metrics.annual_metrics(light.illuminance, occupancy, direct_sun=light.direct_sun, areas=areas,
+                                    daylight_hours=daylight_hours, threshold=args.threshold,
+                                    healthcare=args.healthcare)
+    summary = metrics.annual_summary(result)
+    stats = light.stats
+    summary = {"command": "annual", "scene": str(args.scene), "points_file": str(args.points),
+               "weather": str(args.weather), "weather_values": args.weather_values,
+               "sky_subdivision": args.sky_subdivision, "ground_reflectance": rho_g,
+               "settings": options.as_dict(), "records": stats.records, "rays": stats.rays,
+               "bytes_per_record": light.record_bytes, "sun_positions": int(len(light.sun_directions)),
+               "seconds": None, **summary}
+
+    out = Path(args.output)
+    out.mkdir(exist_ok=True)
+    for name, array in (("illuminance.npy", light.illuminance), ("direct_sun.npy", light.direct_sun)):
+        import io
+
+        buffer = io.BytesIO()
+        np.save(buffer, np.ascontiguousarray(array, np.float32))
+        atomic_write_bytes(out / name, buffer.getvalue())
+    metrics.write_point_table(out / "points.csv", points / scene.unit_scale, result)
+    if plots:
+        _plots(out, scene, points, areas, light, result, args, occupancy)
+    seconds = time.perf_counter() - t0
+    summary["seconds"] = seconds
+    atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    if not args.quiet:
+        o = summary["overall"]
+        ase = f", ASE {o['ase']:.0f} %" if "ase" in o else ""
+        print(f"lbl-illum: a year at {len(points)} points ({int(result.open.occupied_hours)} occupied hours): "
+              f"sDA{args.threshold:g} {o['sda']:.0f} %{ase}, mean DA {readable(o['da'])} %, "
+              f"UDI 100-3000 {readable(o['udi']['useful'])} %, LEED {summary['leed']['points']} points; "
+              f"records per level {stats.records}, {stats.rays:,} rays, {seconds:.1f} s -> {out}", file=sys.stderr)
+    return 0
+
+
+def _plots(out: Path, scene, points, areas, light, result, args, occupancy) -> None:
+    """The plans of DA, sDA and ASE hours and the day x hour map of the mean illuminance."""
+    import numpy as np
+
+    from ..viz import annual_plots
+    from ..workplane.grid import plan_outline
+
+    walls, glazing = plan_outline(scene, float(np.median(points[:, 2])))
+    xy = points / scene.unit_scale
+    where = dict(areas=areas, outline=walls, windows=glazing)
+    name = Path(args.scene).name
+    t = f"{args.threshold:g}"
+    annual_plots.da_plan(out / "da.png", xy, result.open.da, threshold=args.threshold,
+                         title=f"Daylight autonomy DA{t} [%], {name}", **where)
+    annual_plots.sda_plan(out / "sda.png", xy, result.lm83.da, threshold=args.threshold,
+                          title=f"sDA{t}/50%: points with DA{t} >= 50 %, {name}", **where)
+    if result.ase_hours is not None:
+        annual_plots.ase_plan(out / "ase.png", xy, result.ase_hours, title=f"Direct sun >= 1000 lux [h], {name}",
+                              **where)
+    annual_plots.day_hour_plot(out / "day_hour.png", light.illuminance, areas=areas, area=args.area,
+                               occupancy=occupancy,
+                               title=f"Mean illuminance [lux], {args.area or 'all points'}, {name}")
