@@ -3,11 +3,11 @@
 One calculation of the irradiance cache, whose records carry daylight coefficients
 (:mod:`lbl_illum.engine.coefficients`), gives each sensor i a row of coefficients: D_ip
 [lux per cd/m²] for each sky patch p (the ground glow is patch 0) and G_ij [lux per lux]
-for the interreflected light of a sun at the centre of sky patch j.  For the hour h of a
-weather file, with the sky matrix L_ph [cd/m²] of the Perez all-weather model
+for the interreflected light of a sun at position j (:func:`sun_positions`).  For the
+hour h of a weather file, with the sky matrix L_ph [cd/m²] of the Perez all-weather model
 (:func:`lbl_illum.daylight.skymatrix.sky_matrix`, the sun apart) and the sun's direct
-normal illuminance E_dn(h) [lux] spread over the 4 sky patches nearest it with
-``gendaymtx``'s weights s_jh (:func:`~lbl_illum.daylight.skymatrix.sun_patch_weights`),
+normal illuminance E_dn(h) [lux] shared among the 4 sun positions around it with
+bilinear weights s_jh,
 
     E_ih = Σ_p D_ip L_ph + Σ_j G_ij s_jh E_dn(h) + E_sun,ih        [lux]
 

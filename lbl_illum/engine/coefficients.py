@@ -7,13 +7,13 @@ each source, through every bounce below it.  The sources are
 
 * the sky patches p of a Tregenza/Reinhart sky of subdivision MF (row 0 the ground glow,
   :func:`lbl_illum.daylight.skymatrix.sky_patches`), per unit luminance [cd/m²];
-* J suns at the centres of the sky patches the year's sun passes through, per unit
-  direct normal illuminance [lux], for the sun's *interreflected* light only (its direct
-  light at the sensors is computed exactly for each hour,
+* J sun positions (unit vectors, the caller's: :func:`lbl_illum.engine.annual_light.sun_positions`),
+  per unit direct normal illuminance [lux], for the sun's *interreflected* light only (its
+  direct light at the sensors is computed exactly for each hour,
   :mod:`lbl_illum.engine.sun_hours`).
 
-For an hour with patch luminances L and the sun spread over the 4 sun positions
-nearest it (weights s), E = D_sky · L + D_sun · s E_dn.
+For an hour with patch luminances L and the sun shared among the sun positions around
+it (weights s), E = D_sky · L + D_sun · s E_dn.
 
 **How a record's vector is made** — the same rays as its irradiance (Eq. 2), in the same
 order, so that the vectors and the irradiance are one calculation:
@@ -25,10 +25,13 @@ order, so that the vectors and the irradiance are one calculation:
   π/S · w_h · E_h, where E_h is the vector of the light arriving at h: the next level's
   vectors interpolated at h with the paper's weights (Eq. 5, the records the irradiance
   lookup uses, without the gradient terms: they are estimated for one sky only) plus the
-  direct sun at h — for the hits of the first :attr:`CoefficientRecords.exact_levels`
-  levels by a shadow ray per hit and sun position, below them interpolated from the
-  direct sun at the next level's records (sunlit patches' edges are then blurred over a
-  record's radius; the hits of the sensors' own rays, where that would show, are exact).
+  direct sun at h by a shadow ray per hit and sun position.  Inside the building only
+  the rays through the portals are traced (:meth:`CoefficientRecords.sun_at`); below the
+  sensors' records, :data:`SUN_HITS` of each record's hits are, by systematic sampling
+  along its rays, weighted by the inverse of their chance (unbiased).  Interpolating the
+  direct sun from the next level's records instead read 15–40 % high at the hits: the
+  gradient limit makes sunlit records large and shaded ones small, so the sunlit domains
+  reach into the shade.
 
 Linear algebra does the rest: the coefficients of the deepest level first, each level's
 from the one below (the paper's §3.4 order).  Electric light, the ``ambient`` value and
@@ -36,8 +39,8 @@ the sun's specular images are not daylight coefficients and are left out.
 
 Channels: one when every material is grey (its red, green and blue equal), else three
 (the sky's and sun's light are white; a coloured surface reflects each channel apart).
-Each vector is stored as float32 (channels, sources): about 0.9 kB a record for the
-Tregenza sky and 80 sun positions at one channel.
+Each vector is stored as float32 (channels, sources): about 1 kB a record for the
+Tregenza sky and 100 sun positions at one channel.
 """
 
 from __future__ import annotations
