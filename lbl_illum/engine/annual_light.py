@@ -52,7 +52,7 @@ __all__ = ["AnnualLight", "annual_light", "sun_positions", "hour_scene", "DESIGN
 #: changes nothing but the records' irradiance, which no hour uses).
 DESIGN_SKY_ILLUMINANCE = 10_000.0
 #: Spacing [°] of the sun positions in declination and hour angle (:func:`sun_positions`).
-SUN_STEP = 10.0
+SUN_STEP = 12.0
 
 
 @dataclass

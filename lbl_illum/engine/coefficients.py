@@ -39,8 +39,8 @@ the sun's specular images are not daylight coefficients and are left out.
 
 Channels: one when every material is grey (its red, green and blue equal), else three
 (the sky's and sun's light are white; a coloured surface reflects each channel apart).
-Each vector is stored as float32 (channels, sources): about 1 kB a record for the
-Tregenza sky and 100 sun positions at one channel.
+Each vector is stored as float32 (channels, sources): 884 bytes a record for the
+Tregenza sky and 75 sun positions at one channel.
 """
 
 from __future__ import annotations
@@ -58,10 +58,12 @@ __all__ = ["CoefficientRecords", "grey_scene"]
 #: Records a lookup keeps per query (the largest weights if more serve it).
 PAIRS = 16
 #: Hits per record whose direct sun is traced (systematic sampling of its rays): a
-#: record of the levels below the sensors', and a sensor's own record of level 0 — all
-#: of its hits while the sensors' hits number at most SENSOR_SUN_BUDGET, else an equal
-#: share of that budget and at least SENSOR_SUN_HITS.
+#: record of levels 1 and 2, of the levels below them (DEEP_SUN_HITS; their light reaches
+#: the sensors after two reflections more), and a sensor's own record of level 0 — all of
+#: its hits while the sensors' hits number at most SENSOR_SUN_BUDGET, else an equal share
+#: of that budget and at least SENSOR_SUN_HITS.
 SUN_HITS = 8
+DEEP_SUN_HITS = 4
 SENSOR_SUN_HITS = 128
 SENSOR_SUN_BUDGET = 200_000
 _TAG_SUN_HITS = 11
@@ -285,7 +287,7 @@ class CoefficientRecords:
         P = self.patches
         chosen = np.arange(len(owner))
         scale = np.ones(len(owner), np.float32)
-        limit = SUN_HITS
+        limit = SUN_HITS if k <= 2 else DEEP_SUN_HITS
         if k == 0:
             limit = 0 if len(owner) <= SENSOR_SUN_BUDGET else max(SENSOR_SUN_HITS, SENSOR_SUN_BUDGET // len(records))
         if limit:

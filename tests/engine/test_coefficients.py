@@ -94,6 +94,7 @@ def test_grey_scene(office_quarter):
 def exact_sun(monkeypatch):
     """Every hit traced towards every sun (no systematic sampling of the hits)."""
     monkeypatch.setattr(coefficients, "SUN_HITS", 0)
+    monkeypatch.setattr(coefficients, "DEEP_SUN_HITS", 0)
     monkeypatch.setattr(coefficients, "SENSOR_SUN_BUDGET", 10**9)
 
 
@@ -113,8 +114,9 @@ def test_sun_coefficient_is_the_interreflected_sun(office_quarter, exact_sun):
 
 
 def test_sampled_hits_keep_the_sun_unbiased(office_quarter, exact_sun, monkeypatch):
-    """Below the sensors, SUN_HITS of each record's hits traced towards the sun, weighted
-    by their inverse chance: over three seeds the mean agrees with every hit traced."""
+    """Below the sensors, SUN_HITS (DEEP_SUN_HITS below level 2) of each record's hits
+    traced towards the sun, weighted by their inverse chance: over three seeds the mean
+    agrees with every hit traced."""
     scene, points, normals = office_quarter
     sun = Sun(altitude=35.0, azimuth=160.0, direct_normal_illuminance=50000.0)
     scene = dataclasses.replace(scene, sky=NoSky(horizontal_illuminance=0.0, ground_reflectance=0.2), sun=sun)
@@ -122,8 +124,10 @@ def test_sampled_hits_keep_the_sun_unbiased(office_quarter, exact_sun, monkeypat
     for seed in range(3):
         options = dataclasses.replace(OPTIONS, seed=seed)
         monkeypatch.setattr(coefficients, "SUN_HITS", 0)
+        monkeypatch.setattr(coefficients, "DEEP_SUN_HITS", 0)
         exact.append(_run(scene, points, normals, options, sun.direction[None])[2][:, 0, -1])
         monkeypatch.setattr(coefficients, "SUN_HITS", 8)
+        monkeypatch.setattr(coefficients, "DEEP_SUN_HITS", 4)
         sampled.append(_run(scene, points, normals, options, sun.direction[None])[2][:, 0, -1])
     exact, sampled = np.array(exact), np.array(sampled)
     assert sampled.mean() == pytest.approx(exact.mean(), rel=0.02)
