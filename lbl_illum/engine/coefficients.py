@@ -57,6 +57,9 @@ __all__ = ["CoefficientRecords", "grey_scene"]
 
 #: Records a lookup keeps per query (the largest weights if more serve it).
 PAIRS = 16
+#: Hits whose next-level records, or whose direct sun, are found at a time (bounds the
+#: temporaries: 128 bytes a hit for the records, about 30 per hit and sun for the sun).
+HIT_BLOCK = 1 << 18
 #: Hits per record whose direct sun is traced (systematic sampling of its rays): a
 #: record of levels 1 and 2, of the levels below them (DEEP_SUN_HITS; their light reaches
 #: the sensors after two reflections more), and a sensor's own record of level 0 — all of
@@ -271,9 +274,15 @@ class CoefficientRecords:
             weight = self._channels(pending.cat("hit_weight", dtype=np.float32))
             if len(owner) and len(self.suns):
                 self._add_sun(k, owner, weight, pending, known, records)
-            if len(owner) and pending.next_pairs is not None:
-                record, w = pending.next_pairs
-                _gather(owner, weight, record, w, self.values[k + 1], known)
+            if len(owner) and pending.next_solved:
+                hP = pending.cat("hit_P")
+                hNs = pending.cat("hit_Ns", dtype=np.float32)
+                own = pending.next_own
+                for lo in range(0, len(owner), HIT_BLOCK):       # the pairs of a block at a time
+                    part = slice(lo, lo + HIT_BLOCK)
+                    record, w = self.pairs(k + 1, hP[part], hNs[part].astype(np.float64),
+                                           None if own is None else own[part])
+                    _gather(owner[part], weight[part], record, w, self.values[k + 1], known)
         known *= (np.pi / np.asarray(S, np.float64))[:, None, None].astype(np.float32)
         lv = self.integrator.cache.levels[k]
         self._grow(k, lv.count)
@@ -281,10 +290,11 @@ class CoefficientRecords:
 
     def _add_sun(self, k, owner, weight, pending, known, records) -> None:
         """known[owner, :, sun j] += weight · (direct sun at the hit from sun j), by a
-        shadow ray per hit and sun position: for every hit of the first
-        :attr:`exact_levels` levels, below them for about :data:`SUN_HITS` hits per record
-        drawn at random, each weighted by the inverse of its chance (module text)."""
-        P = self.patches
+        shadow ray per hit and sun position: for every hit of the sensors' own records
+        (within :data:`SENSOR_SUN_BUDGET`), below them for :data:`SUN_HITS` or
+        :data:`DEEP_SUN_HITS` hits per record by systematic sampling, each weighted by the
+        inverse of its chance (module text); :data:`HIT_BLOCK` / (J / 8) hits at a time."""
+        P_ = self.patches
         chosen = np.arange(len(owner))
         scale = np.ones(len(owner), np.float32)
         limit = SUN_HITS if k <= 2 else DEEP_SUN_HITS
@@ -303,20 +313,22 @@ class CoefficientRecords:
             u = rng.random(len(counts))[owner]
             chosen = np.flatnonzero(np.floor((rank + 1) * q + u) > np.floor(rank * q + u))
             scale = (1.0 / q[chosen]).astype(np.float32)
-        hP = pending.cat("hit_P")[chosen]
-        hNs = pending.cat("hit_Ns", dtype=np.float32)[chosen].astype(np.float64)
-        hNg = pending.cat("hit_Ng", dtype=np.float32)[chosen].astype(np.float64)
-        # inside: a hit of the inside zone from a record of the inside (the outer face of a
-        # wall in a window's plane is in the zone, but only rays from outside reach it)
-        inside = None
-        if self.context.portal_set is not None:
-            owner_zone = self.integrator.cache.levels[k].zone[records][owner[chosen]]
-            inside = (self.context.zone(hP) == 1) & (owner_zone == 1)
-        sun = self.sun_at(hP, hNs, self.context.tracer.offset(hP, hNg), inside)     # (h, C, J)
-        lit = np.flatnonzero(sun.max(axis=(1, 2)) > 0.0)
-        w = weight[chosen[lit]] * scale[lit, None]
-        for c in range(self.channels):
-            np.add.at(known[:, c, P:], owner[chosen[lit]], sun[lit, c, :] * w[:, c, None])
+        hP = pending.cat("hit_P")
+        hNs = pending.cat("hit_Ns", dtype=np.float32)
+        hNg = pending.cat("hit_Ng", dtype=np.float32)
+        zone = self.integrator.cache.levels[k].zone[records] if self.context.portal_set is not None else None
+        block = max(1, HIT_BLOCK // max(1, len(self.suns) // 8))
+        for lo in range(0, len(chosen), block):
+            pick = chosen[lo:lo + block]
+            P, Ns, Ng = hP[pick], hNs[pick].astype(np.float64), hNg[pick].astype(np.float64)
+            # inside: a hit of the inside zone from a record of the inside (the outer face of a
+            # wall in a window's plane is in the zone, but only rays from outside reach it)
+            inside = None if zone is None else (self.context.zone(P) == 1) & (zone[owner[pick]] == 1)
+            sun = self.sun_at(P, Ns, self.context.tracer.offset(P, Ng), inside)     # (h, C, J)
+            lit = np.flatnonzero(sun.max(axis=(1, 2)) > 0.0)
+            w = weight[pick[lit]] * scale[lo:lo + block][lit, None]
+            for c in range(self.channels):
+                np.add.at(known[:, c, P_:], owner[pick[lit]], sun[lit, c, :] * w[:, c, None])
 
     def at_points(self, points, normals, own) -> np.ndarray:
         """(n, C, K) vectors of level 0 at the sensors (``own``: their own records)."""

@@ -218,12 +218,14 @@ class _Pending:
     ray_dir: list = field(default_factory=list)     # (r·S, 3) direction
     cells: tuple = (1, 1)                            # (M, N) of Eq. 2 at this level
     # daylight coefficients (Integrator.coefficients): the rays that reached the sky, by
-    # record (index into the concatenated records), sky patch and weight; and the next
-    # level's records serving each hit, (record, weight) of CoefficientRecords.pairs
+    # record (index into the concatenated records), sky patch and weight; whether the next
+    # level was solved for the hits, and each hit's own record there (a level without
+    # interpolation) or None
     sky_owner: list = field(default_factory=list)
     sky_patch: list = field(default_factory=list)
     sky_weight: list = field(default_factory=list)
-    next_pairs: tuple | None = None
+    next_solved: bool = False
+    next_own: np.ndarray | None = None
 
     def cat(self, name, width=3, dtype=np.float64):
         """The parts of ``name`` as one array (concatenated once, then kept)."""
@@ -700,8 +702,7 @@ class Integrator:
             run.block_stack[-1][0] = b + 1.0           # the block's levels below are solved
             self._tick(run, f"evaluating level {k}{where}")
             next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
-            if self.coefficients is not None and deeper:
-                pending.next_pairs = self.coefficients.pairs(k + 1, hP, pending.cat("hit_Ns"), own_next)
+            pending.next_solved, pending.next_own = deeper, own_next
             self.evaluate_level(k, pending, next_answer, run)
             self._close_block(k, run)
         run.block_stack.pop()
