@@ -27,6 +27,8 @@ OUTPUT_FILES = ("illuminance.npy", "direct_sun.npy", "points.csv", "summary.json
 PLOT_FILES = ("da.png", "sda.png", "ase.png", "day_hour.png")
 #: Rows of the year the metrics are defined on.
 YEAR_ROWS = 8760
+#: What closed shades let through, as a factor on the glazing's transmittance.
+DEFAULT_SHADE_TRANSMITTANCE = 0.05
 
 
 def add_annual_arguments(parser) -> None:
@@ -56,6 +58,15 @@ def add_annual_arguments(parser) -> None:
     o.add_argument("--healthcare", action="store_true", help="LEED v4.1 points of the Healthcare column")
     o.add_argument("--area", metavar="NAME", help="the area whose mean the day x hour map shows (default: all points)")
     o.add_argument("--no-plots", action="store_true", help="no PNG plots (they need matplotlib)")
+    s = parser.add_argument_group("operable shades (IES LM-83 2.2.6)", "Each group's shades close, hour by hour, when "
+                                  "more than 2 %% of the points would get 1000 lux or more of direct sun; sDA is taken "
+                                  "with the shades so operated, ASE with them open.  Each group costs one more "
+                                  "calculation of the coefficients.")
+    s.add_argument("--shade", action="append", metavar="GROUP=MATERIAL[,MATERIAL...]",
+                   help="a window group: its name and the glass materials of the scene its shades cover (repeat for "
+                        "several groups)")
+    s.add_argument("--shade-transmittance", type=finite(0.0, 1.0), default=DEFAULT_SHADE_TRANSMITTANCE, metavar="F",
+                   help=f"closed shades let through F times the glazing's light (default {DEFAULT_SHADE_TRANSMITTANCE:g})")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress display and no summary line")
 
 
@@ -68,7 +79,21 @@ def _check(args) -> None:
         raise InputError(f"-o {args.output}: folder {out.parent} does not exist")
     if args.dst and args.schedule:
         raise InputError("--dst goes with the LM-83 hours, not with --schedule (give the schedule in clock time)")
+    _shade_groups(args)
 
+
+def _shade_groups(args) -> dict[str, list[str]]:
+    """The ``--shade`` groups: name -> materials, refused in one line when malformed."""
+    groups = {}
+    for text in args.shade or ():
+        name, eq, materials = text.partition("=")
+        names = [m.strip() for m in materials.split(",") if m.strip()]
+        if not eq or not name.strip() or not names:
+            raise InputError(f"--shade {text}: expected GROUP=MATERIAL[,MATERIAL...]")
+        if name.strip() in groups:
+            raise InputError(f"--shade {text}: the group '{name.strip()}' is given twice")
+        groups[name.strip()] = names
+    return groups
 
 def _plots_wanted(args) -> bool:
     """Whether to draw the plots: asked for and matplotlib at hand (said once if not)."""
@@ -125,22 +150,36 @@ def annual_command(args) -> int:
     if not args.preset:
         args.preset = ANNUAL_PRESET
     options = run_options(scene, args)
+    from ..engine.annual_light import shaded_scene
+
+    shades = {}
+    for name, materials in _shade_groups(args).items():
+        try:
+            shades[name] = shaded_scene(scene, materials, args.shade_transmittance)
+        except ValueError as exc:
+            raise InputError(f"--shade {name}: {exc}") from None
     if not args.quiet:
         print(f"lbl-illum: note: the year's skies replace the scene's [sky] and [sun]; quality preset "
               f"'{args.preset}'", file=sys.stderr)
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
     bar = ProgressBar(enabled=not args.quiet)
+    groups = []
     try:
         with compile_notice(enabled=not args.quiet, bar=bar):
             light = annual_light(scene, points, normals, weather, options, ground_reflectance=rho_g, progress=bar,
                                  matrix=matrix)
+            for name, closed in shades.items():
+                bar.describe(f"shades of {name} closed")
+                year = annual_light(closed, points, normals, weather, options, ground_reflectance=rho_g,
+                                    progress=bar, matrix=matrix)
+                groups.append(metrics.WindowGroup(name, year.illuminance, year.direct_sun))
     finally:
         bar.close()
     daylight_hours = metrics.en17037_daylight_hours(
         diffuse_horizontal=np.where(matrix.daylight, matrix.diffuse_horizontal_illuminance, np.nan))
-    result = metrics.annual_metrics(light.illuminance, occupancy, direct_sun=light.direct_sun, areas=areas,
-                                    daylight_hours=daylight_hours, threshold=args.threshold,
+    result = metrics.annual_metrics(light.illuminance, occupancy, direct_sun=light.direct_sun, groups=groups or None,
+                                    areas=areas, daylight_hours=daylight_hours, threshold=args.threshold,
                                     healthcare=args.healthcare)
     summary = metrics.annual_summary(result)
     stats = light.stats
@@ -148,12 +187,17 @@ def annual_command(args) -> int:
                "weather": str(args.weather), "weather_values": args.weather_values,
                "sky_subdivision": args.sky_subdivision, "ground_reflectance": rho_g,
                "settings": options.as_dict(), "records": stats.records, "rays": stats.rays,
+               "shade_groups": {name: materials for name, materials in _shade_groups(args).items()},
+               "shade_transmittance": args.shade_transmittance if shades else None,
                "bytes_per_record": light.record_bytes, "sun_positions": int(len(light.sun_directions)),
                "seconds": None, **summary}
 
     out = Path(args.output)
     out.mkdir(exist_ok=True)
-    for name, array in (("illuminance.npy", light.illuminance), ("direct_sun.npy", light.direct_sun)):
+    arrays = [("illuminance.npy", light.illuminance), ("direct_sun.npy", light.direct_sun)]
+    if result.shades is not None:
+        arrays.append(("illuminance_shades_operated.npy", result.shades.illuminance))
+    for name, array in arrays:
         import io
 
         buffer = io.BytesIO()

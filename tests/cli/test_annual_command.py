@@ -86,6 +86,23 @@ def test_help_names_the_annual_preset(capsys):
     assert "default draft" in text and "--weather-values" in text
 
 
+def test_operable_shades(tmp_path, outdir):
+    """A window group with shades: the operated year, the shaded columns and the shade
+    hours; sDA with the shades operated, ASE with them open (LM-83)."""
+    out = tmp_path / "shades"
+    assert main(["annual", str(SCENE), "--points", str(POINTS), "--weather", str(EPW), "-o", str(out), "--no-plots",
+                 "-q", "--shade", "south=glazing", "--shade-transmittance", "0.1", *QUICK]) == 0
+    doc = json.loads((out / "summary.json").read_text())
+    assert doc["shade_groups"] == {"south": ["glazing"]} and doc["shade_transmittance"] == 0.1
+    assert 0 < doc["shades"]["groups"]["south"] < 3650
+    E = np.load(out / "illuminance.npy")
+    operated = np.load(out / "illuminance_shades_operated.npy")
+    assert operated.shape == E.shape and (operated <= E * 1.0001 + 1e-3).mean() > 0.99
+    assert doc["overall"]["sda"] <= doc["overall"]["sda_shades_open"]
+    assert doc["overall"]["ase"] == json.loads((outdir / "summary.json").read_text())["overall"]["ase"]
+    assert "DA300_shaded" in (out / "points.csv").read_text().splitlines()[0]
+
+
 @pytest.mark.parametrize("change, expect", [
     (lambda t: ["--weather", str(t / "year.txt")], "year.txt"),
     (lambda t: ["--weather", str(t / "missing.epw")], "missing.epw"),
@@ -94,6 +111,10 @@ def test_help_names_the_annual_preset(capsys):
     (lambda t: ["--area", "kitchen"], "kitchen"),
     (lambda t: ["--dst", "us", "--schedule", str(t / "empty.csv")], "--dst"),
     (lambda t: ["--weather", str(t / "short.wea")], "8760"),
+    (lambda t: ["--shade", "south"], "GROUP=MATERIAL"),
+    (lambda t: ["--shade", "south=wall"], "'wall' is not a glass"),
+    (lambda t: ["--shade", "a=glazing", "--shade", "a=glazing"], "given twice"),
+    (lambda t: ["--shade-transmittance", "2"], "--shade-transmittance"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, change, expect):
     (tmp_path / "year.txt").write_text("1 2 3\n")
