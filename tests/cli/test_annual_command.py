@@ -10,17 +10,16 @@ import pytest
 
 from lbl_illum.cli.main import main
 
-from conftest import EXAMPLES, ROOT
+from conftest import EXAMPLES
 
-WEATHER = ROOT.parent / "shared" / "weather"
+WEATHER = EXAMPLES / "weather"
 EPW = WEATHER / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
-WEA = WEATHER / "oak.wea"
+WEA = WEATHER / "oakland_tmy3.wea"
 SCENE = EXAMPLES / "office" / "scene.toml"
 POINTS = EXAMPLES / "office" / "grid.pts"
 #: Enough for the files and figures to be checked, in a few seconds.
 QUICK = ["--samples", "32", "--point-samples", "256", "--bounces", "2"]
 
-pytestmark = pytest.mark.skipif(not EPW.is_file(), reason="the shared weather files are not beside the repository")
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,7 @@ import numpy as np
 
 from lbl_illum.daylight.skymatrix import SkyMatrix, sky_matrix, sky_patches
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "weather"
+DATA = Path(__file__).resolve().parents[2] / "examples" / "weather"
 EPW = DATA / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
 WEA = DATA / "oakland_tmy3.wea"
 #: Radiance's luminous efficacy [lm/W] and RGB → luminance weights.

@@ -12,7 +12,7 @@ import pytest
 from lbl_illum.errors import InputError
 from lbl_illum.daylight.weather import REFERENCE_LEAP_YEAR, REFERENCE_YEAR, HourlyWeather, read_wea, read_weather
 
-DATA = Path(__file__).resolve().parents[1] / "data" / "weather"
+DATA = Path(__file__).resolve().parents[2] / "examples" / "weather"
 EPW = DATA / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
 WEA = DATA / "oakland_tmy3.wea"
 

@@ -12,12 +12,11 @@ from lbl_illum.engine.annual_light import annual_light, hour_scene, shaded_scene
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.options import Options
 
-from conftest import ROOT
+from conftest import EXAMPLES
 
-EPW = ROOT.parent / "shared" / "weather" / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
+EPW = EXAMPLES / "weather" / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
 OPTIONS = Options(accuracy=0.12, samples=64, bounces=3, point_samples=1024, interpolation="paper")
 
-pytestmark = pytest.mark.skipif(not EPW.is_file(), reason="the shared weather files are not beside the repository")
 
 
 @pytest.fixture(scope="module")
