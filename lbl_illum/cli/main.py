@@ -291,6 +291,7 @@ studies:
   corpus              every preset on daylit interiors modelled by others, whole commands against references
   electric            CIE 171 point, area, flux and interreflection cases, a translucent skylight, IES downlights
   glare               DGP, Ev and glare sources of fisheye images against evalglare, a hand-evaluated case and Ev at the eye
+  annual              a year through the cache's daylight coefficients against point-in-time runs and Radiance's two-phase
 """
 
 

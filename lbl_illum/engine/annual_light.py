@@ -131,7 +131,7 @@ def sun_positions(matrix: SkyMatrix, latitude: float, step: float = SUN_STEP) ->
 
 def annual_light(scene, points, normals, weather: HourlyWeather, options: Options | None = None, mf: int = 1,
                  values: str = "irradiance", ground_reflectance: float | None = None, progress=None,
-                 matrix: SkyMatrix | None = None) -> AnnualLight:
+                 matrix: SkyMatrix | None = None, design=None) -> AnnualLight:
     """The illuminance of every row of ``weather`` at (n, 3) ``points`` [m] facing unit
     ``normals`` (module text).
 
@@ -139,7 +139,9 @@ def annual_light(scene, points, normals, weather: HourlyWeather, options: Option
     145 + ground; 2, 4: Reinhart);  values : ``"irradiance"`` or ``"illuminance"``, what
     sets the hours' brightness (:func:`~lbl_illum.daylight.skymatrix.sky_matrix`);
     ground_reflectance : of the ground glow (default: the scene sky's);  progress : as the
-    integrator's;  matrix : a sky matrix made already (``sun="separate"``)
+    integrator's;  matrix : a sky matrix made already (``sun="separate"``);  design :
+    ``(sky, sun)`` that place the records instead of the CIE overcast sky (for measuring
+    that choice)
     """
     t0 = time.perf_counter()
     options = options or scene.options
@@ -147,8 +149,9 @@ def annual_light(scene, points, normals, weather: HourlyWeather, options: Option
     if matrix is None:
         matrix = sky_matrix(weather, mf=mf, sun="separate", values=values, ground_reflectance=rho_g)
     suns, shares = sun_positions(matrix, weather.site.latitude)
-    design = dataclasses.replace(scene, sky=CIEOvercastSky(horizontal_illuminance=DESIGN_SKY_ILLUMINANCE,
-                                                           ground_reflectance=rho_g), sun=None)
+    sky, sun = design if design is not None else (
+        CIEOvercastSky(horizontal_illuminance=DESIGN_SKY_ILLUMINANCE, ground_reflectance=rho_g), None)
+    design = dataclasses.replace(scene, sky=sky, sun=sun)
     points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
     normals = np.asarray(normals, np.float64).reshape(-1, 3)
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)

@@ -38,6 +38,7 @@ STUDIES = {
     "corpus": "corpus",
     "electric": "electric",
     "glare": "glare",
+    "annual": "annual",
 }
 
 

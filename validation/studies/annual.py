@@ -1,0 +1,297 @@
+"""Study: a year of daylight through the cache's daylight coefficients (`lbl-illum
+annual`) against point-in-time runs of the engine and against Radiance's two-phase method.
+
+The bundled office (77 sensors) and the Oakland typical year (`examples/weather`):
+
+* **Hours against point-in-time runs.**  The annual result at sampled hours — overcast,
+  sunny with the sun in the room, sunny with the sun behind the building — against a
+  point-in-time run of the engine at the same preset under that hour's Perez sky and sun
+  (the sky matrix's ε, Δ, sun position, diffuse horizontal and direct normal illuminance;
+  `hour_scene`).  The difference holds everything the coefficients approximate: the sky
+  in 145 patches, the interreflected sun from the sun positions around the hour's, the
+  records placed under the overcast sky, the interpolation without gradient terms, the
+  sampled hits of the sun; and the noise of the two calculations.
+* **Direct sun.**  The annual direct sun (one shadow ray per point and hour to the disk's
+  centre) against the point-in-time run's direct illuminance (jittered shadow rays over
+  the disk) at the sunny hours.
+* **Which sky places the records.**  At the sunny hours, the annual result with the records
+  placed under that hour's own sky and sun, against the overcast placement the command
+  uses (full version only).
+* **Radiance's two-phase method.**  With Radiance's programs at hand (the pyradiance
+  wheel): `gendaymtx` + `rcontrib` + `dctimestep` on the exported office at settings
+  that converge (`validation/studies/annual_radiance.py`), and the direct sun by
+  Radiance; sDA300/50% and ASE1000,250 against ours, and the hourly means at the sampled
+  hours (full version only).
+* **Speed.**  The whole command as a user types it (full version).
+
+Criteria (the issue's): hourly mean error within 3 % of the point-in-time engine, direct
+sun within 1 %, sDA and ASE within 2 percentage points of the converged Radiance run.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from lbl_illum import Options, load_scene, read_points
+from lbl_illum.daylight.skymatrix import sky_matrix
+from lbl_illum.daylight.weather import read_weather
+from lbl_illum.engine.annual_light import annual_light, hour_scene
+from lbl_illum.engine.integrator import Integrator
+from lbl_illum.photometry import luminance
+from lbl_illum.workplane.annual import annual_metrics, annual_summary, lm83_occupancy
+
+from . import repository_root
+from .report import Report, StudyContext, fmt, new_figure, pct
+
+TITLE = "Annual daylight through the cache's daylight coefficients, against point-in-time runs and Radiance"
+
+HOURLY_BOUND = 0.03          # |hourly mean / point-in-time − 1|
+DIRECT_BOUND = 0.01          # |hourly mean direct sun / point-in-time direct − 1|
+METRIC_BOUND = 2.0           # |sDA − Radiance's|, |ASE − Radiance's| [percentage points]
+EPW = "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
+
+FULL = {"options": Options().with_preset("draft"), "every": 1, "hours": {"overcast": 3, "sun in the room": 3,
+                                                                          "sun behind the building": 2},
+        "design": True, "radiance": True, "command": True}
+QUICK = {"options": Options(accuracy=0.12, samples=64, bounces=3, point_samples=1024), "every": 4,
+         "hours": {"overcast": 1, "sun in the room": 1, "sun behind the building": 1},
+         "design": False, "radiance": False, "command": False}
+
+
+def unavailable() -> str | None:
+    """Why the study cannot run here (the bundled office and weather), or None."""
+    root = repository_root()
+    if root is None or not (root / "examples" / "weather" / EPW).is_file():
+        return "needs the examples/ folder of a source checkout (examples/office, examples/weather)"
+    return None
+
+
+def sample_hours(matrix, direct_sun, counts: dict) -> dict[str, list[int]]:
+    """Rows of each kind, spread evenly over the year (deterministic): overcast (ε < 1.2),
+    sunny (ε > 4) with the sun on some sensor, sunny with the sun on none; the sun at least
+    15° up."""
+    day = matrix.daylight & (matrix.sun_altitude > 15.0)
+    lit = direct_sun.max(axis=0) > 0.0
+    kinds = {"overcast": day & (matrix.clearness < 1.2),
+             "sun in the room": day & (matrix.clearness > 4.0) & lit,
+             "sun behind the building": day & (matrix.clearness > 4.0) & ~lit}
+    out = {}
+    for kind, n in counts.items():
+        rows = np.flatnonzero(kinds[kind])
+        out[kind] = [int(rows[i]) for i in np.linspace(0, len(rows) - 1, n + 2)[1:-1].round().astype(int)]
+    return out
+
+
+def run(ctx: StudyContext) -> Report:
+    cfg = QUICK if ctx.quick else FULL
+    root = repository_root()
+    rep = Report("annual", TITLE, "")
+    res = rep.results
+    scene = load_scene(root / "examples" / "office" / "scene.toml")
+    points, normals = read_points(root / "examples" / "office" / "grid.pts", scene.unit_scale)
+    points, normals = points[::cfg["every"]], normals[::cfg["every"]]
+    weather = read_weather(root / "examples" / "weather" / EPW)
+    options = cfg["options"]
+    hours_planned = sum(cfg["hours"].values())
+    ctx.plan(1 + hours_planned + (3 if cfg["design"] else 0) + (1 if cfg["radiance"] else 0)
+             + (1 if cfg["command"] else 0))
+    matrix = sky_matrix(weather, sun="separate")
+    t = time.perf_counter()
+    year = annual_light(scene, points, normals, weather, options, matrix=matrix)
+    res["annual_seconds"] = time.perf_counter() - t
+    ctx.step("the year", year.stats)
+    res["settings"] = {**options.as_dict(), "points": len(points), "sun_positions": len(year.sun_directions),
+                       "records": year.stats.records, "bytes_per_record": year.record_bytes}
+    hours = sample_hours(matrix, year.direct_sun, cfg["hours"])
+    res["hours"] = _hours(ctx, scene, points, normals, options, matrix, year, hours)
+    if cfg["design"]:
+        res["design"] = _design(ctx, scene, points, normals, weather, options, matrix, res["hours"])
+    occupancy = lm83_occupancy()
+    ours = annual_summary(annual_metrics(year.illuminance, occupancy, direct_sun=year.direct_sun))["overall"]
+    res["metrics"] = {"ours": {"sda": ours["sda"], "ase": ours["ase"], "da": ours["da"],
+                               "udi_useful": ours["udi"]["useful"]}}
+    if cfg["radiance"]:
+        res["radiance"] = _radiance(ctx, root, points, normals, occupancy, year, res["hours"])
+    if cfg["command"]:
+        res["command"] = _command(ctx, root)
+    res["checks"] = checks(res)
+    _write(rep, res, year)
+    return rep
+
+
+def _hours(ctx, scene, points, normals, options, matrix, year, hours) -> list[dict]:
+    rows = []
+    for kind, rows_of_kind in hours.items():
+        for h in rows_of_kind:
+            t = time.perf_counter()
+            result = Integrator(hour_scene(scene, matrix, h), options).compute(points, normals)
+            seconds = time.perf_counter() - t
+            ctx.step(f"{kind}: row {h}", result.stats)
+            ref = result.illuminance
+            ours = year.illuminance[:, h].astype(np.float64)
+            rel = ours / ref - 1.0
+            direct_ref = luminance(result.direct)
+            direct = year.direct_sun[:, h].astype(np.float64)
+            row = {"kind": kind, "row": h, "altitude": float(matrix.sun_altitude[h]),
+                   "azimuth": float(matrix.sun_azimuth[h]), "clearness": float(matrix.clearness[h]),
+                   "reference_mean": float(ref.mean()), "annual_mean": float(ours.mean()),
+                   "hourly_error": float(ours.mean() / ref.mean() - 1.0), "mean_abs_error": float(np.abs(rel).mean()),
+                   "max_abs_error": float(np.abs(rel).max()), "point_in_time_seconds": seconds,
+                   "direct_reference_mean": float(direct_ref.mean()), "direct_mean": float(direct.mean())}
+            if direct_ref.mean() > 0.0:
+                row["direct_error"] = float(direct.mean() / direct_ref.mean() - 1.0)
+            rows.append(row)
+    return rows
+
+
+def _design(ctx, scene, points, normals, weather, options, matrix, hours) -> list[dict]:
+    """The sunny hours with the records placed under their own sky and sun."""
+    out = []
+    for row in [r for r in hours if r["kind"] != "overcast"][:3]:
+        h = row["row"]
+        own = hour_scene(scene, matrix, h)
+        year = annual_light(scene, points, normals, weather, options, matrix=matrix, design=(own.sky, own.sun))
+        ctx.step(f"records placed under row {h}'s sky", year.stats)
+        mean = float(year.illuminance[:, h].mean())
+        out.append({"row": h, "kind": row["kind"], "annual_mean_own_placement": mean,
+                    "hourly_error_own_placement": mean / row["reference_mean"] - 1.0,
+                    "hourly_error_overcast_placement": row["hourly_error"]})
+    return out
+
+
+def _radiance(ctx, root, points, normals, occupancy, year, hours) -> dict | None:
+    try:
+        from . import annual_radiance
+    except ImportError:
+        return None
+    if annual_radiance.unavailable() is not None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        out = annual_radiance.two_phase(root / "examples" / "office" / "scene.toml", points, normals,
+                                        root / "examples" / "weather" / EPW, Path(tmp))
+    ctx.step("Radiance two-phase")
+    theirs = annual_summary(annual_metrics(out["illuminance"], occupancy, direct_sun=out["direct_sun"]))["overall"]
+    hourly = [{"row": r["row"], "kind": r["kind"], "radiance_mean": float(out["illuminance"][:, r["row"]].mean()),
+               "annual_mean": r["annual_mean"], "point_in_time_mean": r["reference_mean"]} for r in hours]
+    lit = out["direct_sun"] > 0.0
+    return {"sda": theirs["sda"], "ase": theirs["ase"], "da": theirs["da"], "udi_useful": theirs["udi"]["useful"],
+            "seconds": out["seconds"], "settings": out.get("settings"), "commands": out.get("commands"),
+            "annual_sum_ratio": float(year.illuminance.sum() / out["illuminance"].sum()),
+            "direct_sum_ratio": float(year.direct_sun[lit].sum() / out["direct_sun"][lit].sum()) if lit.any() else None,
+            "hours": hourly}
+
+
+def _command(ctx, root) -> dict:
+    """The whole command as a user types it (kernels compiled by the runs before)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        argv = [sys.executable, "-m", "lbl_illum", "annual", "examples/office/scene.toml", "--points",
+                "examples/office/grid.pts", "--weather", f"examples/weather/{EPW}", "-o", str(Path(tmp) / "year"), "-q"]
+        t = time.perf_counter()
+        subprocess.run(argv, cwd=root, check=True, capture_output=True)
+        seconds = time.perf_counter() - t
+    ctx.step("the whole command")
+    return {"seconds": seconds, "argv": "lbl-illum annual examples/office/scene.toml --points examples/office/grid.pts "
+                                        f"--weather examples/weather/{EPW} -o office-year"}
+
+
+def checks(res: dict) -> list[dict]:
+    """The bounds the quick version asserts: (check, value, bound, held)."""
+    out = []
+
+    def add(name, value, bound):
+        out.append({"check": name, "value": float(value), "bound": float(bound), "held": bool(value <= bound)})
+
+    for r in res["hours"]:
+        add(f"row {r['row']} ({r['kind']}): |hourly mean / point-in-time − 1|", abs(r["hourly_error"]), HOURLY_BOUND)
+        if "direct_error" in r and r["direct_reference_mean"] > 10.0:
+            add(f"row {r['row']} ({r['kind']}): |direct sun / point-in-time − 1|", abs(r["direct_error"]), DIRECT_BOUND)
+    rad = res.get("radiance")
+    if rad:
+        add("|sDA − Radiance two-phase| [points]", abs(res["metrics"]["ours"]["sda"] - rad["sda"]), METRIC_BOUND)
+        add("|ASE − Radiance| [points]", abs(res["metrics"]["ours"]["ase"] - rad["ase"]), METRIC_BOUND)
+    return out
+
+
+def _write(rep: Report, res: dict, year) -> None:
+    doc = __doc__.split("\n\n", 1)[1].split("Criteria")[0]
+    paragraphs = doc.strip().split("\n\n")
+    rep.text(paragraphs[0])
+    items = []
+    for line in "\n".join(paragraphs[1:]).splitlines():
+        if line.startswith("* "):
+            items.append(line[2:].strip())
+        elif items:
+            items[-1] += " " + line.strip()
+    rep.bullets(items)
+    s = res["settings"]
+    rep.text(f"Settings: accuracy {s['accuracy']:g}, samples {s['samples']}, bounces {s['bounces']}, point samples "
+             f"{s['point_samples']}, interpolation {s['interpolation']}; {s['points']} sensors; "
+             f"{s['sun_positions']} sun positions; records per level {s['records']}, {s['bytes_per_record']} bytes "
+             f"of coefficients each. The year took {res['annual_seconds']:.1f} s in the study's process.")
+
+    rep.heading("Hours against point-in-time runs")
+    rep.table(["row", "kind", "sun alt, az [°]", "ε", "point-in-time mean [lux]", "annual mean [lux]",
+               "hourly mean error", "mean |error| per point", "max", "direct sun: point-in-time / annual [lux]",
+               "direct error"],
+              [[str(r["row"]), r["kind"], f"{r['altitude']:.1f}, {r['azimuth']:.0f}", f"{r['clearness']:.2f}",
+                fmt(r["reference_mean"], 5), fmt(r["annual_mean"], 5), pct(r["hourly_error"]),
+                pct(r["mean_abs_error"]), pct(r["max_abs_error"]),
+                f"{fmt(r['direct_reference_mean'], 5)} / {fmt(r['direct_mean'], 5)}",
+                pct(r["direct_error"]) if "direct_error" in r else "—"] for r in res["hours"]])
+    if res.get("design"):
+        rep.heading("Which sky places the records")
+        rep.table(["row", "kind", "hourly error, records placed under the overcast sky",
+                   "records placed under the hour's own sky and sun"],
+                  [[str(d["row"]), d["kind"], pct(d["hourly_error_overcast_placement"]),
+                    pct(d["hourly_error_own_placement"])] for d in res["design"]])
+        rep.text("The command places the records once, under the CIE overcast sky, and the coefficients serve every "
+                 "hour; a record placement for one sunny hour serves that hour a little better and the others not "
+                 "at all.")
+    rep.heading("Annual metrics")
+    ours, rad = res["metrics"]["ours"], res.get("radiance")
+    rows = [["lbl-illum annual", fmt(ours["sda"], 3), fmt(ours["ase"], 3), fmt(ours["da"], 3),
+             fmt(ours["udi_useful"], 3)]]
+    if rad:
+        rows.append(["Radiance two-phase", fmt(rad["sda"], 3), fmt(rad["ase"], 3), fmt(rad["da"], 3),
+                     fmt(rad["udi_useful"], 3)])
+    rep.table(["", "sDA300/50% [% of points]", "ASE1000,250 [% of points]", "mean DA300 [%]",
+               "mean UDI 100–3000 [%]"], rows)
+    if rad:
+        rep.text(f"Radiance: {rad['seconds']:.0f} s ({rad.get('settings')}). Sum of the year's illuminance, ours / "
+                 f"Radiance's: {rad['annual_sum_ratio']:.4f}; of the direct sun where Radiance's is lit: "
+                 f"{fmt(rad['direct_sum_ratio'], 4)}.")
+        rep.table(["row", "kind", "point-in-time mean", "annual mean", "Radiance two-phase mean"],
+                  [[str(h["row"]), h["kind"], fmt(h["point_in_time_mean"], 5), fmt(h["annual_mean"], 5),
+                    fmt(h["radiance_mean"], 5)] for h in rad["hours"]])
+    else:
+        rep.text("Radiance's programs were not run here (not installed, or the quick version).")
+    if res.get("command"):
+        rep.heading("Speed")
+        rep.text(f"`{res['command']['argv']}`: {res['command']['seconds']:.1f} s as a whole command (plots included), "
+                 "on the machine of results.json.")
+    rep.figure("year", _figure(year), "Mean illuminance of the sensors, day by day and hour by hour (left), and each "
+               "sensor's daylight autonomy DA300 (right).")
+    rep.heading("Bounds", 3)
+    rep.table(["check", "measured", "bound", "held"],
+              [[c["check"], fmt(c["value"], 3), fmt(c["bound"], 3), str(c["held"])] for c in res["checks"]])
+
+
+def _figure(year):
+    fig, (a, b) = new_figure(10.0, 3.6, ncols=2, gridspec_kw={"width_ratios": [3, 1]})
+    mean = year.illuminance.mean(axis=0).reshape(365, 24).T
+    im = a.imshow(mean, aspect="auto", origin="lower", cmap="viridis", extent=(0, 365, 0, 24))
+    a.set_xlabel("day of the year")
+    a.set_ylabel("hour (local standard time)")
+    fig.colorbar(im, ax=a, label="lux")
+    occupied = lm83_occupancy() > 0
+    da = 100.0 * (year.illuminance[:, occupied] >= 300.0).mean(axis=1)
+    b.hist(da, bins=20, range=(0, 100), color="tab:blue")
+    b.set_xlabel("DA300 [%]")
+    b.set_ylabel("sensors")
+    return fig
