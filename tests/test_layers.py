@@ -15,7 +15,7 @@ ALLOWED = {
     "scene": {"daylight", "io.files"},
     "daylight": {"scene.geometry"},
     "engine": {"scene", "daylight"},
-    "glare": {"scene.views", "io.images"},
+    "glare": {"scene.views", "io.images", "daylight.skymatrix", "daylight.sun"},
 }
 #: Single modules allowed more: the record store's save/load conveniences, which import the
 #: file format when called (the engine itself never reads or writes a cache file).

@@ -24,6 +24,8 @@ __all__ = ["add_annual_arguments", "annual_command", "ANNUAL_PRESET", "OUTPUT_FI
 ANNUAL_PRESET = "draft"
 #: What OUTDIR receives (the plots only with matplotlib, unless --no-plots).
 OUTPUT_FILES = ("illuminance.npy", "direct_sun.npy", "points.csv", "summary.json")
+#: With --views: per view and hour, the DGP and the vertical illuminance; the figures.
+GLARE_FILES = ("glare_dgp.npy", "glare_ev.npy", "glare.json")
 PLOT_FILES = ("da.png", "sda.png", "ase.png", "day_hour.png")
 #: Rows of the year the metrics are defined on.
 YEAR_ROWS = 8760
@@ -58,6 +60,15 @@ def add_annual_arguments(parser) -> None:
     o.add_argument("--healthcare", action="store_true", help="LEED v4.1 points of the Healthcare column")
     o.add_argument("--area", metavar="NAME", help="the area whose mean the day x hour map shows (default: all points)")
     o.add_argument("--no-plots", action="store_true", help="no PNG plots (they need matplotlib)")
+    v = parser.add_argument_group("annual glare", "At the eyes of named views ([views.NAME] in the scene file; a "
+                                  "180 degree field along each view's direction): the vertical illuminance of every "
+                                  "hour, the simplified DGP, and the DGP with the sun and the sky patches above the "
+                                  "threshold seen through the glazing as sources; glare autonomy, the share of "
+                                  "occupied hours per DGP class and the EN 17037 class (docs/glare.md).")
+    v.add_argument("--views", nargs="+", metavar="NAME", help="the views whose glare to compute, or 'all'")
+    v.add_argument("--glare-threshold", type=finite(0.0, above=True), default=2000.0, metavar="L",
+                   help="luminance [cd/m2] from which a sky patch seen through the glazing is a glare source "
+                        "(default 2000, evalglare's)")
     s = parser.add_argument_group("operable shades (IES LM-83 2.2.6)", "Each group's shades close, hour by hour, when "
                                   "more than 2 %% of the points would get 1000 lux or more of direct sun; sDA is taken "
                                   "with the shades so operated, ASE with them open.  Each group costs one more "
@@ -128,6 +139,7 @@ def annual_command(args) -> int:
     plots = _plots_wanted(args)
     scene = load_scene(args.scene)
     points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
+    views = _views(scene, args)
     if args.area is not None and args.area not in set(areas.tolist()):
         raise InputError(f"--area {args.area}: no point of {Path(args.points).name} is in that area")
     weather = read_weather(args.weather)
@@ -165,20 +177,26 @@ def annual_command(args) -> int:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
     bar = ProgressBar(enabled=not args.quiet)
     groups = []
+    n = len(points)
+    eyes = np.array([v.position for v in views.values()], np.float64).reshape(-1, 3)       # metres
+    looks = np.array([v.unit_direction for v in views.values()]).reshape(-1, 3)
+    sensors, facing = np.vstack([points, eyes]), np.vstack([normals, looks])
     try:
         with compile_notice(enabled=not args.quiet, bar=bar):
-            light = annual_light(scene, points, normals, weather, options, ground_reflectance=rho_g, progress=bar,
+            light = annual_light(scene, sensors, facing, weather, options, ground_reflectance=rho_g, progress=bar,
                                  matrix=matrix)
             for name, closed in shades.items():
                 bar.describe(f"shades of {name} closed")
                 year = annual_light(closed, points, normals, weather, options, ground_reflectance=rho_g,
                                     progress=bar, matrix=matrix)
                 groups.append(metrics.WindowGroup(name, year.illuminance, year.direct_sun))
+            glare = _glare(views, eyes, light, matrix, args, n, bar) if views else {}
     finally:
         bar.close()
     daylight_hours = metrics.en17037_daylight_hours(
         diffuse_horizontal=np.where(matrix.daylight, matrix.diffuse_horizontal_illuminance, np.nan))
-    result = metrics.annual_metrics(light.illuminance, occupancy, direct_sun=light.direct_sun, groups=groups or None,
+    E_grid, D_grid = light.illuminance[:n], light.direct_sun[:n]
+    result = metrics.annual_metrics(E_grid, occupancy, direct_sun=D_grid, groups=groups or None,
                                     areas=areas, daylight_hours=daylight_hours, threshold=args.threshold,
                                     healthcare=args.healthcare)
     summary = metrics.annual_summary(result)
@@ -194,7 +212,10 @@ def annual_command(args) -> int:
 
     out = Path(args.output)
     out.mkdir(exist_ok=True)
-    arrays = [("illuminance.npy", light.illuminance), ("direct_sun.npy", light.direct_sun)]
+    arrays = [("illuminance.npy", E_grid), ("direct_sun.npy", D_grid)]
+    if glare:
+        arrays += [("glare_dgp.npy", np.array([g.dgp for g in glare.values()], np.float32)),
+                   ("glare_ev.npy", np.array([g.ev for g in glare.values()], np.float32))]
     if result.shades is not None:
         arrays.append(("illuminance_shades_operated.npy", result.shades.illuminance))
     for name, array in arrays:
@@ -204,22 +225,61 @@ def annual_command(args) -> int:
         np.save(buffer, np.ascontiguousarray(array, np.float32))
         atomic_write_bytes(out / name, buffer.getvalue())
     metrics.write_point_table(out / "points.csv", points / scene.unit_scale, result)
+    if glare:
+        doc = {"views": {name: {"position": list(views[name].position), "direction": list(views[name].direction),
+                                **g.summary(occupancy)} for name, g in glare.items()},
+               "threshold": args.glare_threshold, "order": list(glare),
+               "method": "DGP (Wienold & Christoffersen 2006, low-light corrected) with the sun and the sky patches "
+                         "seen through the glazing above the threshold as sources; DGPs = 6.22e-5 Ev + 0.184"}
+        atomic_write_text(out / "glare.json", json.dumps(doc, indent=2) + "\n")
+        summary["glare"] = {name: {"glare_autonomy": v["dgp"]["glare_autonomy"], "en17037": v["dgp"]["en17037"]}
+                            for name, v in doc["views"].items()}
     if plots:
-        _plots(out, scene, points, areas, light, result, args, occupancy)
+        _plots(out, scene, points, areas, E_grid, result, args, occupancy)
     seconds = time.perf_counter() - t0
     summary["seconds"] = seconds
     atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     if not args.quiet:
         o = summary["overall"]
         ase = f", ASE {o['ase']:.0f} %" if "ase" in o else ""
+        views_text = "".join(f", glare autonomy {name} {g['glare_autonomy']:.0f} %"
+                             for name, g in summary.get("glare", {}).items())
         print(f"lbl-illum: a year at {len(points)} points ({int(result.open.occupied_hours)} occupied hours): "
-              f"sDA{args.threshold:g} {o['sda']:.0f} %{ase}, mean DA {readable(o['da'])} %, "
+              f"sDA{args.threshold:g} {o['sda']:.0f} %{ase}{views_text}, mean DA {readable(o['da'])} %, "
               f"UDI 100-3000 {readable(o['udi']['useful'])} %, LEED {summary['leed']['points']} points; "
               f"records per level {stats.records}, {stats.rays:,} rays, {seconds:.1f} s -> {out}", file=sys.stderr)
     return 0
 
 
-def _plots(out: Path, scene, points, areas, light, result, args, occupancy) -> None:
+def _views(scene, args) -> dict:
+    """The ``--views`` of the scene, by name ('all': every one), refused when unknown."""
+    if not args.views:
+        return {}
+    names = list(scene.views) if args.views == ["all"] else list(dict.fromkeys(args.views))
+    if not names:
+        raise InputError(f"--views all: {Path(args.scene).name} has no [views.NAME] table")
+    missing = [n for n in names if n not in scene.views]
+    if missing:
+        known = ", ".join(scene.views) or "none"
+        raise InputError(f"--views {missing[0]}: no [views.{missing[0]}] in {Path(args.scene).name} (its views: {known})")
+    return {n: scene.views[n] for n in names}
+
+
+def _glare(views, eyes, light, matrix, args, n, bar) -> dict:
+    """Each view's :class:`~lbl_illum.glare.annual.AnnualGlare` from the sensors at its eye."""
+    from ..glare.annual import annual_glare, patch_visibility
+
+    bar.describe("sky patches seen from the views")
+    out = {}
+    for i, (name, view) in enumerate(views.items()):
+        vis = patch_visibility(light.context.direct, light.context.tracer, eyes[i], view, matrix.patches)
+        out[name] = annual_glare(light.illuminance[n + i], matrix.luminance, matrix.sun_direction,
+                                 matrix.direct_normal_illuminance, light.direct_sun[n + i], view, vis,
+                                 threshold=args.glare_threshold)
+    return out
+
+
+def _plots(out: Path, scene, points, areas, illuminance, result, args, occupancy) -> None:
     """The plans of DA, sDA and ASE hours and the day x hour map of the mean illuminance."""
     import numpy as np
 
@@ -238,6 +298,6 @@ def _plots(out: Path, scene, points, areas, light, result, args, occupancy) -> N
     if result.ase_hours is not None:
         annual_plots.ase_plan(out / "ase.png", xy, result.ase_hours, title=f"Direct sun >= 1000 lux [h], {name}",
                               **where)
-    annual_plots.day_hour_plot(out / "day_hour.png", light.illuminance, areas=areas, area=args.area,
+    annual_plots.day_hour_plot(out / "day_hour.png", illuminance, areas=areas, area=args.area,
                                occupancy=occupancy,
                                title=f"Mean illuminance [lux], {args.area or 'all points'}, {name}")

@@ -69,6 +69,8 @@ class AnnualLight:
     stats : the cache calculation's :class:`~lbl_illum.engine.integrator.RunStats`
     record_bytes : bytes of coefficients per record (all levels alike)
     seconds : the whole calculation [s]
+    context : the :class:`~lbl_illum.engine.context.LightingContext` of the calculation (its
+        tracer and glazing, for more shadow rays: the sky patches seen from a view point)
     """
 
     illuminance: np.ndarray
@@ -80,6 +82,7 @@ class AnnualLight:
     stats: RunStats
     record_bytes: int
     seconds: float
+    context: object = None
 
 
 def sun_positions(matrix: SkyMatrix, latitude: float, step: float = SUN_STEP) -> tuple[np.ndarray, np.ndarray]:
@@ -172,7 +175,7 @@ def annual_light(scene, points, normals, weather: HourlyWeather, options: Option
     np.maximum(E, 0.0, out=E)
     return AnnualLight(illuminance=E, direct_sun=direct, sky=matrix, sky_coefficients=D, sun_coefficients=G,
                        sun_directions=suns, stats=result.stats, record_bytes=dc.channels * dc.sources * 4,
-                       seconds=time.perf_counter() - t0)
+                       seconds=time.perf_counter() - t0, context=integrator.context)
 
 
 def hour_scene(scene, matrix: SkyMatrix, hour: int):

@@ -102,6 +102,26 @@ def test_operable_shades(tmp_path, outdir):
     assert "DA300_shaded" in (out / "points.csv").read_text().splitlines()[0]
 
 
+def test_views_give_annual_glare(tmp_path):
+    out = tmp_path / "glare"
+    assert main(["annual", str(SCENE), "--points", str(POINTS), "--weather", str(EPW), "-o", str(out), "--no-plots",
+                 "-q", "--views", "all", *QUICK]) == 0
+    dgp, ev = np.load(out / "glare_dgp.npy"), np.load(out / "glare_ev.npy")
+    assert dgp.shape == ev.shape == (2, 8760) and dgp.dtype == np.float32
+    assert (dgp >= 0).all() and (dgp <= 1).all() and ev.max() > 2000
+    doc = json.loads((out / "glare.json").read_text())
+    assert doc["order"] == ["desk", "side"]
+    side = doc["views"]["side"]
+    assert side["sun_in_view_hours"] > 0 and doc["views"]["desk"]["sun_in_view_hours"] < side["sun_in_view_hours"]
+    shares = side["dgp"]["classes"]
+    assert sum(shares.values()) == pytest.approx(100.0)
+    assert side["dgp"]["glare_autonomy"] == pytest.approx(shares["imperceptible"] + shares["perceptible"])
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["glare"]) == {"desk", "side"}
+    # the grid's own results are those of a run without views
+    assert np.load(out / "illuminance.npy").shape == (77, 8760)
+
+
 @pytest.mark.parametrize("change, expect", [
     (lambda t: ["--weather", str(t / "year.txt")], "year.txt"),
     (lambda t: ["--weather", str(t / "missing.epw")], "missing.epw"),
@@ -114,6 +134,7 @@ def test_operable_shades(tmp_path, outdir):
     (lambda t: ["--shade", "south=wall"], "'wall' is not a glass"),
     (lambda t: ["--shade", "a=glazing", "--shade", "a=glazing"], "given twice"),
     (lambda t: ["--shade-transmittance", "2"], "--shade-transmittance"),
+    (lambda t: ["--views", "nowhere"], "no [views.nowhere]"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, change, expect):
     (tmp_path / "year.txt").write_text("1 2 3\n")

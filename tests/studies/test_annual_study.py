@@ -36,3 +36,9 @@ def test_the_three_kinds_of_hour_are_there(report):
     sunny = [r for r in doc["results"]["hours"] if r["kind"] == "sun in the room"][0]
     assert sunny["direct_mean"] > 1000.0
     assert (folder / "report.md").is_file() and (folder / "year.png").is_file()
+
+
+def test_annual_glare_against_a_rendered_fisheye(report):
+    doc, _ = report
+    rows = doc["results"]["glare"]
+    assert rows and all(0.0 < r["dgp"] <= 1.0 and 0.0 < r["image_dgp"] <= 1.0 for r in rows)

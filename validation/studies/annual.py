@@ -22,6 +22,12 @@ The bundled office (77 sensors) and the Oakland typical year (`examples/weather`
   that converge (`validation/studies/annual_radiance.py`), and the direct sun by
   Radiance; sDA300/50% and ASE1000,250 against ours, and the hourly means at the sampled
   hours (full version only).
+* **Annual glare against rendered fisheyes.**  At hours with the sun in view of the
+  office's `side` view and with bright sky in view of its `desk` view, the annual DGP
+  (the sun and the sky patches above 2000 cd/m² seen through the glazing as sources,
+  E_v from the coefficients) and the simplified DGPs, against the DGP of a fisheye
+  rendered by the engine at that hour and evaluated as evalglare does (every bright
+  pixel a source: sunlit surfaces too).
 * **Speed.**  The whole command as a user types it (full version).
 
 Criteria (the issue's): hourly mean error within 3 % of the point-in-time engine, direct
@@ -30,6 +36,7 @@ sun within 1 %, sDA and ASE within 2 percentage points of the converged Radiance
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 import tempfile
@@ -54,14 +61,15 @@ TITLE = "Annual daylight through the cache's daylight coefficients, against poin
 HOURLY_BOUND = 0.03          # |hourly mean / point-in-time − 1|
 DIRECT_BOUND = 0.01          # |hourly mean direct sun / point-in-time direct − 1|
 METRIC_BOUND = 2.0           # |sDA − Radiance's|, |ASE − Radiance's| [percentage points]
+EV_IMAGE_BOUND = 0.05        # |E_v annual / E_v of the rendered fisheye − 1|, the sun out of view
 EPW = "USA_CA_Oakland.Intl.AP.724930_TMY3.epw"
 
 FULL = {"options": Options().with_preset("draft"), "every": 1, "hours": {"overcast": 3, "sun in the room": 3,
                                                                           "sun behind the building": 2},
-        "design": True, "radiance": True, "command": True}
+        "design": True, "radiance": True, "command": True, "glare": {"side": 2, "desk": 2}, "image": (300, "low", 4)}
 QUICK = {"options": Options(accuracy=0.12, samples=64, bounces=3, point_samples=1024), "every": 4,
          "hours": {"overcast": 1, "sun in the room": 1, "sun behind the building": 1},
-         "design": False, "radiance": False, "command": False}
+         "design": False, "radiance": False, "command": False, "glare": {"desk": 1}, "image": (100, "draft", 1)}
 
 
 def unavailable() -> str | None:
@@ -100,12 +108,18 @@ def run(ctx: StudyContext) -> Report:
     options = cfg["options"]
     hours_planned = sum(cfg["hours"].values())
     ctx.plan(1 + hours_planned + (3 if cfg["design"] else 0) + (1 if cfg["radiance"] else 0)
-             + (1 if cfg["command"] else 0))
+             + (1 if cfg["command"] else 0) + sum(cfg["glare"].values()))
     matrix = sky_matrix(weather, sun="separate")
+    views = {name: scene.views[name] for name in cfg["glare"]}
+    eyes = np.array([v.position for v in views.values()], np.float64)
+    looks = np.array([v.unit_direction for v in views.values()])
     t = time.perf_counter()
-    year = annual_light(scene, points, normals, weather, options, matrix=matrix)
+    full = annual_light(scene, np.vstack([points, eyes]), np.vstack([normals, looks]), weather, options,
+                        matrix=matrix)
     res["annual_seconds"] = time.perf_counter() - t
-    ctx.step("the year", year.stats)
+    ctx.step("the year", full.stats)
+    n = len(points)
+    year = dataclasses.replace(full, illuminance=full.illuminance[:n], direct_sun=full.direct_sun[:n])
     res["settings"] = {**options.as_dict(), "points": len(points), "sun_positions": len(year.sun_directions),
                        "records": year.stats.records, "bytes_per_record": year.record_bytes}
     hours = sample_hours(matrix, year.direct_sun, cfg["hours"])
@@ -118,6 +132,7 @@ def run(ctx: StudyContext) -> Report:
                                "udi_useful": ours["udi"]["useful"]}}
     if cfg["radiance"]:
         res["radiance"] = _radiance(ctx, root, points, normals, occupancy, year, res["hours"])
+    res["glare"] = _glare(ctx, scene, views, eyes, full, n, matrix, cfg)
     if cfg["command"]:
         res["command"] = _command(ctx, root)
     res["checks"] = checks(res)
@@ -148,6 +163,43 @@ def _hours(ctx, scene, points, normals, options, matrix, year, hours) -> list[di
                 row["direct_error"] = float(direct.mean() / direct_ref.mean() - 1.0)
             rows.append(row)
     return rows
+
+
+def _glare(ctx, scene, views, eyes, full, n, matrix, cfg) -> list[dict]:
+    """Annual DGP and DGPs at hours with the sun (``side``) or bright sky (``desk``) in view
+    against rendered fisheyes of those hours."""
+    from lbl_illum.engine import image_options, render_image
+    from lbl_illum.glare import evaluate_glare
+    from lbl_illum.glare.annual import annual_glare, patch_visibility
+
+    side, preset, spp = cfg["image"]
+    out = []
+    for i, (name, view) in enumerate(views.items()):
+        vis = patch_visibility(full.context.direct, full.context.tracer, eyes[i], view, matrix.patches)
+        g = annual_glare(full.illuminance[n + i], matrix.luminance, matrix.sun_direction,
+                         matrix.direct_normal_illuminance, full.direct_sun[n + i], view, vis)
+        occupied = lm83_occupancy() > 0
+        if name == "side":
+            pick = np.flatnonzero(g.sun_in_view & occupied & (matrix.sun_altitude > 10.0))
+        else:
+            pick = np.flatnonzero(occupied & (g.sources > 0) & ~g.sun_in_view)
+        count = cfg["glare"][name]
+        for h in pick[np.linspace(0, len(pick) - 1, count + 2)[1:-1].round().astype(int)] if len(pick) else []:
+            h = int(h)
+            hour = hour_scene(scene, matrix, h)
+            integ = Integrator(hour, image_options(Options().with_preset(preset)))
+            t = time.perf_counter()
+            image = render_image(hour, view, side, side, pixel_samples=spp, integrator=integ)
+            seconds = time.perf_counter() - t
+            ctx.step(f"glare: {name}, row {h}", image.stats)
+            rendered = evaluate_glare(luminance(image.rgb), view)
+            out.append({"view": name, "row": h, "altitude": float(matrix.sun_altitude[h]),
+                        "azimuth": float(matrix.sun_azimuth[h]), "sun_in_view": bool(g.sun_in_view[h]),
+                        "patch_sources": int(g.sources[h] - g.sun_in_view[h]), "ev": float(g.ev[h]),
+                        "dgp": float(g.dgp[h]), "dgps": float(g.dgps[h]), "image_ev": rendered.ev,
+                        "image_dgp": rendered.dgp, "image_sources": len(rendered.sources), "image_side": side,
+                        "image_seconds": seconds})
+    return out
 
 
 def _design(ctx, scene, points, normals, weather, options, matrix, hours) -> list[dict]:
@@ -211,6 +263,10 @@ def checks(res: dict) -> list[dict]:
         add(f"row {r['row']} ({r['kind']}): |hourly mean / point-in-time − 1|", abs(r["hourly_error"]), HOURLY_BOUND)
         if "direct_error" in r and r["direct_reference_mean"] > 10.0:
             add(f"row {r['row']} ({r['kind']}): |direct sun / point-in-time − 1|", abs(r["direct_error"]), DIRECT_BOUND)
+    for g in res["glare"]:
+        if not g["sun_in_view"]:
+            add(f"glare, {g['view']} row {g['row']}: |E_v annual / fisheye − 1|", abs(g["ev"] / g["image_ev"] - 1),
+                EV_IMAGE_BOUND)
     rad = res.get("radiance")
     if rad:
         add("|sDA − Radiance two-phase| [points]", abs(res["metrics"]["ours"]["sda"] - rad["sda"]), METRIC_BOUND)
@@ -271,6 +327,19 @@ def _write(rep: Report, res: dict, year) -> None:
                     fmt(h["radiance_mean"], 5)] for h in rad["hours"]])
     else:
         rep.text("Radiance's programs were not run here (not installed, or the quick version).")
+    if res["glare"]:
+        rep.heading("Annual glare against rendered fisheyes")
+        rep.table(["view", "row", "sun alt, az [°]", "sun in view", "patch sources", "E_v annual / fisheye [lux]",
+                   "DGP annual", "DGPs", "DGP of the fisheye (its sources)"],
+                  [[g["view"], str(g["row"]), f"{g['altitude']:.1f}, {g['azimuth']:.0f}", "yes" if g["sun_in_view"] else
+                    "no", str(g["patch_sources"]), f"{fmt(g['ev'], 5)} / {fmt(g['image_ev'], 5)}", f"{g['dgp']:.3f}",
+                    f"{g['dgps']:.3f}", f"{g['image_dgp']:.3f} ({g['image_sources']})"] for g in res["glare"]])
+        first = res["glare"][0]
+        rep.text(f"Fisheyes of {first['image_side']} × {first['image_side']} pixels rendered at the hour's sky and sun "
+                 "and evaluated as `lbl-illum glare` does (evalglare's method: every pixel above 2000 cd/m² in a "
+                 "source, sunlit surfaces included). The annual DGP takes only the sun and the sky patches as "
+                 "sources; the difference in the last columns is what that leaves out, and the rendered E_v's "
+                 "sampling of the sun's disk where it is in view.")
     if res.get("command"):
         rep.heading("Speed")
         rep.text(f"`{res['command']['argv']}`: {res['command']['seconds']:.1f} s as a whole command (plots included), "
