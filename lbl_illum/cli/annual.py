@@ -157,8 +157,8 @@ def annual_command(args) -> int:
     except ValueError as exc:
         raise InputError(f"{Path(args.weather).name}: {exc}") from None
     if not (matrix.daylight & (occupancy > 0)).any():
-        raise InputError(f"{Path(args.weather).name}: the sun is never up in an occupied hour at this site "
-                         f"(latitude {weather.site.latitude:g})")
+        raise InputError(f"{Path(args.weather).name}: no occupied hour has daylight (the sun up at latitude "
+                         f"{weather.site.latitude:g} and light in the file)")
     if not args.preset:
         args.preset = ANNUAL_PRESET
     options = run_options(scene, args)

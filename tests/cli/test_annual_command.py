@@ -78,6 +78,18 @@ def test_wea_and_epw_agree(outdir, tmp_path):
     assert b.sum() == pytest.approx(a.sum(), rel=0.03)
 
 
+def test_reinhart_sky(tmp_path, outdir):
+    """MF 2: 577 sky patches; the year is the Tregenza one's within the finer patches' difference."""
+    out = tmp_path / "mf2"
+    assert main(["annual", str(SCENE), "--points", str(POINTS), "--weather", str(EPW), "-o", str(out), "--no-plots",
+                 "-q", "--sky-subdivision", "2", *QUICK]) == 0
+    doc = json.loads((out / "summary.json").read_text())
+    assert doc["sky_subdivision"] == 2 and doc["bytes_per_record"] > 4 * 577
+    E = np.load(out / "illuminance.npy")
+    assert E.shape == (77, 8760)
+    assert E.sum() == pytest.approx(np.load(outdir / "illuminance.npy").sum(), rel=0.03)
+
+
 def test_help_names_the_annual_preset(capsys):
     with pytest.raises(SystemExit):
         main(["annual", "--help"])
@@ -135,6 +147,7 @@ def test_views_give_annual_glare(tmp_path):
     (lambda t: ["--shade", "a=glazing", "--shade", "a=glazing"], "given twice"),
     (lambda t: ["--shade-transmittance", "2"], "--shade-transmittance"),
     (lambda t: ["--views", "nowhere"], "no [views.nowhere]"),
+    (lambda t: ["--weather", str(t / "dark.wea")], "no occupied hour has daylight"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, change, expect):
     (tmp_path / "year.txt").write_text("1 2 3\n")
@@ -142,6 +155,8 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, change, expe
     (tmp_path / "file.txt").write_text("")
     lines = WEA.read_text().splitlines()
     (tmp_path / "short.wea").write_text("\n".join(lines[:6 + 48]) + "\n")
+    dark = [" ".join(line.split()[:3] + ["0", "0"]) for line in lines[6:]]       # a polar night all year
+    (tmp_path / "dark.wea").write_text("\n".join(lines[:6] + dark) + "\n")
     args = {"--weather": str(EPW), "-o": str(tmp_path / "out")}
     extra = change(tmp_path)
     for key in ("--weather", "-o"):
