@@ -20,8 +20,15 @@ modifier, which the scene file maps to a material like an OBJ ``usemtl`` name:
 ``trans``, ``light`` and ``glow`` definitions become tables of the scene file's
 ``[materials]`` form; patterns and textures that modify them are left out, and
 ``alias`` names are followed.  Everything else is skipped, each kind counted in one
-warning; a ``!`` command line is refused (it needs Radiance to run it).  Lengths are in
-the file's unit, scaled to metres by the caller.
+warning.  Lengths are in the file's unit, scaled to metres by the caller.
+
+**Commands** (lines starting with ``!``): ``!xform`` is read here, without Radiance
+(:func:`xform_primitives`: ``-t -rx -ry -rz -s -mx -my -mz -i -a -m -n``, nested files,
+relative paths from the top file's folder as ``oconv`` run there resolves them, then from
+the including file's); any other (``!genbox``, ``!gensky`` ...) is run with Radiance's
+programs when they are installed (the pyradiance wheel), its output read as scene text,
+and otherwise refused in one line naming it.  A missing file or a file that includes
+itself is refused in one line.
 """
 
 from __future__ import annotations
@@ -34,7 +41,7 @@ import numpy as np
 from ..errors import InputError
 from ..photometry import RADIANCE_WHITE_EFFICACY
 
-__all__ = ["RadPrimitive", "read_rad", "rad_surfaces", "modifier_definitions", "material_tables",
+__all__ = ["RadPrimitive", "read_rad", "xform_primitives", "rad_surfaces", "modifier_definitions", "material_tables",
            "read_rad_surfaces", "material_name", "SURFACE_TYPES", "SEGMENTS", "SPHERE_LEVEL"]
 
 #: Radiance's surface types read here (the rest are skipped with a warning).
@@ -78,9 +85,17 @@ class RadPrimitive:
     line: int
 
 
-def read_rad(path: str | Path, where: str) -> list[RadPrimitive]:
-    """Every primitive of a Radiance scene file, in order.  A malformed primitive or a
-    ``!`` command is an :class:`InputError` naming the file and line."""
+def read_rad(path: str | Path, where: str, root: Path | None = None, _stack: tuple = ()) -> list[RadPrimitive]:
+    """Every primitive of a Radiance scene file, in order, with the ``!`` commands expanded:
+    ``!xform`` here (:func:`xform_primitives`), any other command by running it when
+    Radiance's programs are at hand (:func:`_run_command`).  A malformed primitive, a
+    missing or recursive include, a command that cannot run is an :class:`InputError`
+    naming the file and line.
+
+    ``root``: the folder relative paths of commands start from, as Radiance's ``oconv``
+    run in the top file's folder resolves them (default: this file's folder); a path not
+    found there is looked for beside the file that names it.
+    """
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{where}: is a folder, not a scene file ({path})")
@@ -90,16 +105,26 @@ def read_rad(path: str | Path, where: str) -> list[RadPrimitive]:
         text = path.read_bytes().decode("utf-8", errors="replace")
     except PermissionError:
         raise InputError(f"{where}: cannot read the file (permission denied)") from None
+    root = path.parent if root is None else root
+    stack = _stack + (path.resolve(),)
+    out: list[RadPrimitive] = []
     words: list[str] = []
     lines: list[int] = []
     for number, line in enumerate(text.splitlines(), 1):
-        body = line.split("#", 1)[0]
+        body = line.split("#", 1)[0] if not line.lstrip().startswith("!") else line
         if body.lstrip().startswith("!"):
-            raise InputError(f"{where}: line {number}: the command '{body.strip()[:60]}' needs Radiance to run "
-                             "it; expand the file first (xform FILE > flat.rad)")
+            out += _parse_words(words, lines, where)        # what came before the command
+            words, lines = [], []
+            out += _command(body.strip()[1:], path, root, f"{where}: line {number}", stack)
+            continue
         parts = body.split()
         words.extend(parts)
         lines.extend([number] * len(parts))
+    return out + _parse_words(words, lines, where)
+
+
+def _parse_words(words: list[str], lines: list[int], where: str) -> list[RadPrimitive]:
+    """The primitives of a run of words (each with its line)."""
     out = []
     i, n = 0, len(words)
     while i < n:
@@ -134,6 +159,202 @@ def read_rad(path: str | Path, where: str) -> list[RadPrimitive]:
             raise InputError(f"{where}: line {start}: {kind} '{name}': a real argument is not a number") from None
         out.append(RadPrimitive(modifier, kind, name, args[0], reals, start))
     return out
+
+
+# ---------------------------------------------------------------------------
+# Commands: !xform, and the others through Radiance
+# ---------------------------------------------------------------------------
+
+def _command(text: str, path: Path, root: Path, where: str, stack: tuple) -> list[RadPrimitive]:
+    """The primitives a ``!`` command line gives."""
+    import shlex
+
+    try:
+        argv = shlex.split(text)
+    except ValueError as exc:
+        raise InputError(f"{where}: the command '!{text[:60]}' cannot be read ({exc})") from None
+    if not argv:
+        return []
+    if Path(argv[0]).name == "xform":
+        return _xform(argv, path, root, where, stack)
+    return _run_command(argv, text, path, root, where)
+
+
+def _find(name: str, path: Path, root: Path) -> Path | None:
+    for folder in (root, path.parent):
+        candidate = (folder / name)
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _xform(argv: list[str], path: Path, root: Path, where: str, stack: tuple) -> list[RadPrimitive]:
+    """``!xform [options] FILE...``: the files' primitives, transformed (:func:`xform_primitives`)."""
+    options, files = _xform_options(argv[1:], where)
+    if not files:
+        raise InputError(f"{where}: !xform without a file (reading its standard input is not supported)")
+    prims: list[RadPrimitive] = []
+    for name in files:
+        if name.startswith("!") or name == "-":
+            raise InputError(f"{where}: !xform of '{name}': only files can be transformed here")
+        found = _find(name, path, root)
+        if found is None:
+            raise InputError(f"{where}: !xform: no such file '{name}' (looked in {root} and {path.parent})")
+        if found.resolve() in stack:
+            raise InputError(f"{where}: !xform {name}: the file includes itself (recursive include)")
+        prims += read_rad(found, f"{where}: {name}", root, stack)
+    return xform_primitives(prims, options, where)
+
+
+#: xform options of one number (the rest take three, or none).
+_XFORM_ONE = ("-rx", "-ry", "-rz", "-s", "-i", "-a")
+
+
+def _xform_options(args: list[str], where: str) -> tuple[list[tuple], list[str]]:
+    """Parse xform's options: ``(options, files)``; options as (flag, value) in order."""
+    out, i = [], 0
+    while i < len(args):
+        flag = args[i]
+        if not flag.startswith("-") or flag == "-":
+            break
+        if flag not in ("-t", "-mx", "-my", "-mz", "-e", "-c", "-m", "-n") + _XFORM_ONE:
+            raise InputError(f"{where}: !xform option '{flag}' is not supported here (read: -t -rx -ry -rz -s "
+                             "-mx -my -mz -i -a -m -n -e -c)")
+        try:
+            if flag == "-t":
+                out.append((flag, tuple(float(x) for x in args[i + 1:i + 4])))
+                if len(out[-1][1]) != 3:
+                    raise IndexError
+                i += 4
+            elif flag in _XFORM_ONE:
+                value = float(args[i + 1]) if flag not in ("-i", "-a") else int(args[i + 1])
+                out.append((flag, value))
+                i += 2
+            elif flag in ("-mx", "-my", "-mz", "-e", "-c"):
+                out.append((flag, None))
+                i += 1
+            else:                                                   # -m, -n
+                out.append((flag, args[i + 1]))
+                i += 2
+        except (IndexError, ValueError):
+            raise InputError(f"{where}: !xform option '{flag}': missing or bad value") from None
+    return out, args[i:]
+
+
+def _rotation(axis: int, degrees: float) -> np.ndarray:
+    a = np.radians(degrees)
+    c, s_ = np.cos(a), np.sin(a)
+    m = np.eye(4)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s_, s_, c
+    return m
+
+
+def _xform_matrices(options: list[tuple]) -> list[np.ndarray]:
+    """The 4 × 4 transforms of every copy xform makes: the transforms in order, each ``-a N``
+    making N copies with what follows it applied 0 … N − 1 times, each ``-i N`` applying
+    what follows it N times (until the next ``-a`` or ``-i``)."""
+    copies = [np.eye(4)]
+    segment, kind, count = np.eye(4), "once", 1
+
+    def close():
+        nonlocal copies
+        if kind == "array":
+            steps = [np.linalg.matrix_power(segment, k) for k in range(count)]
+            copies = [s @ m for m in copies for s in steps]
+        else:
+            step = np.linalg.matrix_power(segment, count if kind == "iterate" else 1)
+            copies = [step @ m for m in copies]
+
+    for flag, value in options:
+        m = None
+        if flag == "-t":
+            m = np.eye(4)
+            m[:3, 3] = value
+        elif flag in ("-rx", "-ry", "-rz"):
+            m = _rotation("xyz".index(flag[2]), value)
+        elif flag == "-s":
+            m = np.diag([value, value, value, 1.0])
+        elif flag in ("-mx", "-my", "-mz"):
+            m = np.eye(4)
+            m["xyz".index(flag[2]), "xyz".index(flag[2])] = -1.0
+        elif flag in ("-a", "-i"):
+            close()
+            segment, kind, count = np.eye(4), "array" if flag == "-a" else "iterate", int(value)
+        if m is not None:
+            segment = m @ segment
+    close()
+    return copies
+
+
+def xform_primitives(prims: list[RadPrimitive], options: list[tuple], where: str = "") -> list[RadPrimitive]:
+    """Radiance's ``xform`` on primitives (``xform.c``): each copy's transform moves the
+    surfaces' points and scales their radii (uniform scale only), turns ring normals and
+    source directions, and reverses a polygon's vertices when it mirrors (so that its
+    normal stays on the side it was); ``-m`` sets the surfaces' modifier, ``-n`` prefixes
+    every identifier."""
+    modifier = next((v for f, v in reversed(options) if f == "-m"), None)
+    prefix = next((v for f, v in reversed(options) if f == "-n"), None)
+    out = []
+    copies = _xform_matrices(options)
+    for c, m in enumerate(copies):
+        linear = m[:3, :3]
+        scale = abs(np.linalg.det(linear)) ** (1.0 / 3.0)
+        mirror = np.linalg.det(linear) < 0.0
+        for p in prims:
+            r = p.reals
+            kind = p.kind
+            geometric = kind in SURFACE_TYPES or kind in ("source", "instance", "mesh")
+            if kind == "polygon":
+                pts = r.reshape(-1, 3) @ linear.T + m[:3, 3]
+                if mirror:
+                    pts = pts[::-1]
+                r = pts.ravel()
+            elif kind in ("sphere", "bubble") and len(r) == 4:
+                r = np.r_[linear @ r[:3] + m[:3, 3], r[3] * scale]
+            elif kind in ("cylinder", "tube") and len(r) == 7:
+                r = np.r_[linear @ r[:3] + m[:3, 3], linear @ r[3:6] + m[:3, 3], r[6] * scale]
+            elif kind in ("cone", "cup") and len(r) == 8:
+                r = np.r_[linear @ r[:3] + m[:3, 3], linear @ r[3:6] + m[:3, 3], r[6:8] * scale]
+            elif kind == "ring" and len(r) == 8:
+                normal = linear @ r[3:6]
+                r = np.r_[linear @ r[:3] + m[:3, 3], normal / max(np.linalg.norm(normal), 1e-300) *
+                          np.linalg.norm(r[3:6]), r[6:8] * scale]
+            elif kind == "source" and len(r) == 4:
+                d = linear @ r[:3]
+                r = np.r_[d / max(np.linalg.norm(d), 1e-300) * np.linalg.norm(r[:3]), r[3]]
+            name = p.name if prefix is None else (f"{prefix}.{c}.{p.name}" if len(copies) > 1 else f"{prefix}.{p.name}")
+            out.append(RadPrimitive(modifier if (modifier is not None and geometric) else p.modifier, kind, name,
+                                    p.strings, r, p.line))
+    return out
+
+
+def _run_command(argv: list[str], text: str, path: Path, root: Path, where: str) -> list[RadPrimitive]:
+    """Any other command (``!genbox``, ``!gensky`` ...), run by the shell in ``root`` with
+    Radiance's programs, its output read as scene text; without Radiance, one line naming it."""
+    import os
+    import subprocess
+    import tempfile
+
+    from ..io.radiance import radiance_programs
+
+    programs = radiance_programs()
+    name = Path(argv[0]).name
+    if programs is None or programs.get("root") is None or not (Path(programs["root"]) / "bin" / name).is_file():
+        raise InputError(f"{where}: the command '!{text[:60]}' needs Radiance's {name} (pip install pyradiance), "
+                         "or expand the file first")
+    env = dict(programs["env"])
+    env["PATH"] = os.pathsep.join([str(Path(programs["root"]) / "bin"), env.get("PATH", "")])
+    run = subprocess.run(text, shell=True, cwd=root, env=env, capture_output=True, text=True)
+    if run.returncode != 0:
+        message = (run.stderr.strip().splitlines() or ["no message"])[0]
+        raise InputError(f"{where}: the command '!{text[:60]}' failed: {message}")
+    with tempfile.NamedTemporaryFile("w", suffix=".rad", delete=False) as tmp:
+        tmp.write(run.stdout)
+    try:
+        return read_rad(tmp.name, f"{where}: output of !{name}", root, (path.resolve(),))
+    finally:
+        os.unlink(tmp.name)
 
 
 # ---------------------------------------------------------------------------

@@ -178,7 +178,6 @@ def test_definitions_from_a_separate_mat_file(tmp_path):
     ("m polygon p\n0\n0\n9 0 0 0 1 0 0 1 x 0", "line 1: polygon 'p': a real argument is not a number"),
     ("m polygon p\n0\n0\n12 0 0 0 1 0 0", "12 real arguments announced, 6 left"),
     ("m sphere s\n0\n0\n3 0 0 0", "sphere 's': needs 4 reals"),
-    ("!genbox m box 1 1 1", "line 1: the command '!genbox m box 1 1 1' needs Radiance"),
     ("m polygon p\n0\n0", "missing its real argument count"),
     ("m ring r\n0\n0\n8 0 0 0 0 0 1 2 2", "ring 'r': needs a normal and two different, non-negative radii"),
 ])
@@ -220,3 +219,86 @@ def test_trans_becomes_translucent(tmp_path, spec, warned):
     assert m.kind == "translucent"
     assert np.allclose(m.reflectance, C * 0.75) and np.allclose(m.transmittance, C * 0.25)
     assert any("trans read as translucent" in w for w in scene.warnings) == warned
+
+
+# -- commands: !xform read here, the others through Radiance ----------------------------------------------
+
+SQUARE = "m polygon sq\n0\n0\n12 0 0 0 1 0 0 1 1 0 0 1 0\n"
+
+
+def _area_and_centre(prims):
+    parts = rad_surfaces(prims, "t")
+    tri = np.concatenate([p.vertices for p in parts])
+    return area(tri), tri.reshape(-1, 3).mean(axis=0)
+
+
+def test_xform_moves_turns_scales_and_mirrors(tmp_path):
+    _write(tmp_path, "sq.rad", SQUARE)
+    _write(tmp_path, "top.rad", "!xform -rz 90 -t 5 0 0 -s 2 sq.rad\n")
+    prims = read_rad(tmp_path / "top.rad", "top.rad")
+    pts = prims[0].reals.reshape(-1, 3)
+    # (x, y) -> rotated 90 degrees about z -> moved 5 along x -> scaled 2 about the origin
+    expected = 2.0 * (np.array([[0, 0, 0], [0, 1, 0], [-1, 1, 0], [-1, 0, 0]]) + [5, 0, 0])
+    np.testing.assert_allclose(pts, expected, atol=1e-12)
+    # a mirror reverses the vertices, so the normal stays on the side it was on
+    _write(tmp_path, "mir.rad", "!xform -mz sq.rad\n")
+    m = read_rad(tmp_path / "mir.rad", "mir.rad")[0].reals.reshape(-1, 3)
+    n = np.cross(m[1] - m[0], m[2] - m[0])
+    assert n[2] < 0 and np.allclose(m[:, 2], 0)              # the plane's own normal was +z; mirrored it is -z
+    sphere = "m sphere ball\n0\n0\n4 1 0 0 0.5\n"
+    _write(tmp_path, "ball.rad", sphere)
+    _write(tmp_path, "b.rad", "!xform -s 3 -t 0 0 1 ball.rad\n")
+    np.testing.assert_allclose(read_rad(tmp_path / "b.rad", "b.rad")[0].reals, [3, 0, 1, 1.5])
+
+
+def test_xform_arrays_nested_files_and_modifiers(tmp_path):
+    (tmp_path / "parts").mkdir()
+    _write(tmp_path / "parts", "sq.rad", SQUARE)
+    _write(tmp_path / "parts", "row.rad", "!xform -a 3 -t 2 0 0 parts/sq.rad\n")     # paths from the top folder
+    _write(tmp_path, "top.rad", "void plastic paint\n0\n0\n5 .5 .5 .5 0 0\n"
+                                "!xform -m paint -a 2 -t 0 10 0 parts/row.rad\n")
+    prims = read_rad(tmp_path / "top.rad", "top.rad")
+    polys = [p for p in prims if p.kind == "polygon"]
+    assert len(polys) == 6 and all(p.modifier == "paint" for p in polys)
+    origins = sorted(tuple(p.reals[:2]) for p in polys)
+    assert origins == [(0, 0), (0, 10), (2, 0), (2, 10), (4, 0), (4, 10)]
+    total, _ = _area_and_centre(prims)
+    assert total == pytest.approx(6.0)
+
+
+@pytest.mark.parametrize("top, message", [
+    ("!xform -t 1 0 0 missing.rad\n", "no such file 'missing.rad'"),
+    ("!xform -t 1 0\n", "option '-t': missing or bad value"),
+    ("!xform -q 1 sq.rad\n", "option '-q' is not supported"),
+    ("!xform loop.rad\n", "recursive include"),
+    ("!xform\n", "without a file"),
+])
+def test_bad_xform_is_one_line_naming_the_line(tmp_path, top, message):
+    _write(tmp_path, "sq.rad", SQUARE)
+    _write(tmp_path, "loop.rad", "!xform top.rad\n")
+    _write(tmp_path, "top.rad", "# first\n" + top)
+    with pytest.raises(InputError, match=r"^top.rad: line 2.*" + message.replace("(", r"\(").replace(")", r"\)")):
+        read_rad(tmp_path / "top.rad", "top.rad")
+
+
+def test_other_commands_need_radiance(tmp_path, monkeypatch):
+    import lbl_illum.io.radiance as radiance
+
+    _write(tmp_path, "box.rad", "void plastic m\n0\n0\n5 .5 .5 .5 0 0\n!genbox m box 1 2 3\n")
+    monkeypatch.setattr(radiance, "radiance_programs", lambda: None)
+    with pytest.raises(InputError, match=r"^box.rad: line 5: the command '!genbox m box 1 2 3' needs Radiance's genbox"):
+        read_rad(tmp_path / "box.rad", "box.rad")
+
+
+def test_other_commands_run_through_radiance(tmp_path):
+    from conftest import radiance_tool
+
+    if radiance_tool("genbox") is None:
+        pytest.skip("Radiance's genbox is not installed (pip install pyradiance)")
+    _write(tmp_path, "box.rad", "void plastic m\n0\n0\n5 .5 .5 .5 0 0\n!genbox m box 1 2 3\n")
+    prims = read_rad(tmp_path / "box.rad", "box.rad")
+    polys = [p for p in prims if p.kind == "polygon"]
+    assert len(polys) == 6
+    total, centre = _area_and_centre(prims)
+    assert total == pytest.approx(2 * (1 * 2 + 2 * 3 + 1 * 3))
+    np.testing.assert_allclose(centre, [0.5, 1.0, 1.5], atol=1e-9)
