@@ -52,13 +52,13 @@ SEGMENTS = 24
 #: Icosphere subdivisions of a Radiance sphere (320 triangles, chords within 1.4 % of r).
 SPHERE_LEVEL = 2
 #: Radiance's material types (modifiers of surfaces); ``MATERIAL_TYPES`` are converted.
-MATERIAL_TYPES = ("plastic", "metal", "glass", "mirror", "trans", "light", "glow")
+MATERIAL_TYPES = ("plastic", "metal", "glass", "mirror", "trans", "light", "glow", "BRTDfunc", "illum")
 #: Radiance's luminous efficacy for its RGB radiance: luminance [cd/m²] = 179 × radiance.
 WHITE_EFFICACY = RADIANCE_WHITE_EFFICACY
 #: Types that modify others without being a material this reader converts.
 OTHER_MODIFIERS = frozenset((
-    "plastic2", "metal2", "trans2", "dielectric", "interface", "illum", "spotlight", "mist", "prism1",
-    "prism2", "plasfunc", "metfunc", "transfunc", "plasdata", "metdata", "transdata", "BRTDfunc", "BSDF",
+    "plastic2", "metal2", "trans2", "dielectric", "interface", "spotlight", "mist", "prism1",
+    "prism2", "plasfunc", "metfunc", "transfunc", "plasdata", "metdata", "transdata", "BSDF",
     "aBSDF", "antimatter", "ashik2", "WGMDfunc", "texfunc", "texdata", "colorfunc", "brightfunc", "colordata",
     "brightdata", "colorpict", "colortext", "brighttext", "mixfunc", "mixdata", "mixpict", "mixtext",
     "spectrum", "specfile", "specfunc", "specdata", "specpict",
@@ -535,9 +535,13 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
     translucent, diffuse reflectance (1 − s)(1 − t_d) C and diffuse transmittance
     (1 − s) t_d C (a specular part of either is warned: its reflection is dropped, its
     transmission made diffuse); ``light``, ``glow``:
-    light surfaces of luminance 179 × radiance.  A pattern that modifies a material is
-    left out (warned).  ``alias`` is followed.  A modifier that is not defined, or whose
-    type is not converted, is an :class:`InputError` naming it.
+    light surfaces of luminance 179 × radiance; ``BRTDfunc`` in the forms ``lbl-illum
+    export radiance`` writes (:func:`_brtdfunc`); ``illum``: its alternate material (the
+    first string argument), or without one an opening (sampled as a portal, seen by no
+    ray: what Radiance's illum without an alternate is to rays that are not shadow rays).
+    A pattern that modifies a material is left out (warned).  ``alias`` is followed.  A
+    modifier that is not defined, or whose type is not converted, is an
+    :class:`InputError` naming it.
     """
     from .materials import glazing_optics
 
@@ -548,6 +552,19 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
         prim, where = _resolve(name, definitions, seen, notes)
         a = prim.reals
         label = f"{where}: line {prim.line}: {prim.kind} '{prim.name}'"
+        if prim.kind == "illum":
+            if prim.strings and prim.strings[0] != "void":
+                prim, where = _resolve(prim.strings[0], definitions, set(seen), notes)
+                a, label = prim.reals, f"{where}: line {prim.line}: {prim.kind} '{prim.name}'"
+                notes["illum read as its alternate material"] = notes.get("illum read as its alternate material", 0) + 1
+            else:
+                out[name] = {"type": "opening"}
+                notes["illum without an alternate read as an opening"] = \
+                    notes.get("illum without an alternate read as an opening", 0) + 1
+                continue
+        if prim.kind == "BRTDfunc":
+            out[name] = _brtdfunc(prim, label)
+            continue
         need = {"plastic": 5, "metal": 5, "glass": 3, "mirror": 3, "trans": 7, "light": 3, "glow": 4}[prim.kind]
         if len(a) < need or (prim.kind == "glass" and len(a) not in (3, 4)):
             raise InputError(f"{label}: needs {need} reals, got {len(a)}")
@@ -580,6 +597,42 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
     if warnings is not None and notes:
         warnings.append("Radiance modifiers: " + "; ".join(f"{count} {what}" for what, count in notes.items()))
     return out
+
+
+def _brtdfunc(prim: RadPrimitive, label: str) -> dict:
+    """A ``BRTDfunc`` as ``lbl-illum export radiance`` writes it (io/radiance.py):
+
+    * constant glass: strings ρ_r ρ_g ρ_b τ_r τ_g τ_b 0 0 0 ``.``, nine zero reals →
+      ``glass``, model ``constant``;
+    * Fresnel panes: strings ``glz_rr … glz_tb 0 0 0 lbl_glazing.cal``, reals nine zeros,
+      n, t_n (RGB), panes → ``glass``, model ``fresnel`` of those panes;
+    * translucent: strings of zeros and ``.``, reals ρ (front), ρ (back), τ_d (RGB) →
+      ``translucent``.
+
+    Any other form is an :class:`InputError`: map the modifier in ``materials``."""
+    from .materials import glazing_optics
+
+    st, a = prim.strings, prim.reals
+    if len(st) == 10 and st[9] == "." and len(a) == 9 and not np.any(a):
+        try:
+            values = [float(v) for v in st[:9]]
+        except ValueError:
+            values = None
+        if values is not None and not any(values[6:9]):
+            return {"type": "glass", "model": "constant", "reflectance": values[:3], "transmittance": values[3:6]}
+    if len(st) == 10 and st[:6] == ["glz_rr", "glz_rg", "glz_rb", "glz_tr", "glz_tg", "glz_tb"] and len(a) == 14:
+        index, tn, panes = float(a[9]), np.clip(a[10:13], 0.0, 1.0), int(round(a[13]))
+        if panes in (1, 2):
+            tau, _ = glazing_optics(np.ones(1), tn, index, panes)
+            return {"type": "glass", "transmittance": [float(t) for t in tau[0]], "refractive_index": index,
+                    "panes": panes}
+    if len(st) == 10 and st[9] == "." and all(v == "0" for v in st[:9]) and len(a) == 9:
+        if np.allclose(a[0:3], a[3:6]):
+            return {"type": "translucent", "reflectance": [float(v) for v in a[0:3]],
+                    "transmittance": [float(v) for v in a[6:9]]}
+    raise InputError(f"{label}: this BRTDfunc's form is not read (read: the constant glass, Fresnel panes and "
+                     "translucent forms lbl-illum export radiance writes); map the modifier to a material in "
+                     "'materials'")
 
 
 def _resolve(name: str, definitions, seen: set, notes: dict):
