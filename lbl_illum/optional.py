@@ -24,6 +24,7 @@ EXTRAS = {
     "pvlib": ("'lbl_illum[solar]'", "the NREL SPA solar position"),
     "pyradiance": ("'lbl_illum[radiance]'", "Radiance's programs"),
     "OpenImageIO": ("OpenImageIO", "image files"),
+    "honeybee_radiance": ("'lbl_illum[honeybee]'", "Honeybee models (.hbjson)"),
 }
 
 

@@ -37,7 +37,8 @@ def add_annual_arguments(parser) -> None:
     """Arguments of ``lbl-illum annual`` (the quality options are added by the caller)."""
     parser.add_argument("scene", help="scene file (.toml); its [sky] and [sun] are set aside")
     parser.add_argument("--points", required=True, metavar="PTS", help="sensor points (.pts, optional area name "
-                        "column: areas get their own figures)")
+                        "column: areas get their own figures), or a Honeybee model (.hbjson: its sensor grids are "
+                        "the areas, and OUTDIR/results/ gets Honeybee's annual layout)")
     parser.add_argument("--weather", required=True, metavar="FILE", help="weather file of a year, 8760 rows: "
                         "EnergyPlus .epw or Radiance/DAYSIM .wea")
     parser.add_argument("-o", "--output", required=True, metavar="OUTDIR",
@@ -225,6 +226,11 @@ def annual_command(args) -> int:
         np.save(buffer, np.ascontiguousarray(array, np.float32))
         atomic_write_bytes(out / name, buffer.getvalue())
     metrics.write_point_table(out / "points.csv", points / scene.unit_scale, result)
+    if Path(args.points).suffix.lower() == ".hbjson":       # Honeybee's annual layout, for Ladybug's tools
+        from ..io.honeybee_results import write_annual_folder
+        from ..scene.honeybee import read_grids
+
+        write_annual_folder(out / "results", read_grids(args.points), E_grid, D_grid, matrix.sun_altitude > 0.0)
     if glare:
         doc = {"views": {name: {"position": list(views[name].position), "direction": list(views[name].direction),
                                 **g.summary(occupancy)} for name, g in glare.items()},

@@ -304,7 +304,14 @@ def _check_run_files(args) -> None:
     from ..viz.plots import check_plot_path
     from ..io.points import check_output_path
 
-    check_output_path(args.output)
+    if _grid_folder(args):
+        out = Path(args.output)
+        if out.exists() and not out.is_dir():
+            raise InputError(f"{args.output}: is a file; a Honeybee model's results go into a folder of .res files")
+        if not out.resolve().parent.is_dir():
+            raise InputError(f"{args.output}: folder {out.parent} does not exist")
+    else:
+        check_output_path(args.output)
     if args.rebuild_cache and not args.cache:
         raise InputError("--rebuild-cache: give the cache file with --cache FILE")
     for extra in (args.stats, args.cache, args.summary):
@@ -323,6 +330,27 @@ def _check_run_files(args) -> None:
         check_view_path(args.view3d)
     if args.thresholds is not None and not args.thresholds:
         raise InputError("--thresholds: give at least one value")
+
+
+def _grid_folder(args) -> bool:
+    """Points from a Honeybee model and an output without a suffix: a folder of one ``.res``
+    per sensor grid and ``grids_info.json``, as Ladybug Tools reads them."""
+    return Path(args.points).suffix.lower() == ".hbjson" and Path(args.output).suffix == ""
+
+
+def _write_values(args, scene, points, normals, result, values, areas, **extra) -> None:
+    """The results file, or a Honeybee model's folder of ``.res`` files (:func:`_grid_folder`)."""
+    from ..photometry import luminance
+    from ..io.points import write_results
+
+    if _grid_folder(args):
+        from ..io.honeybee_results import write_res_folder
+        from ..scene.honeybee import read_grids
+
+        write_res_folder(args.output, read_grids(args.points), values)
+        return
+    write_results(args.output, points / scene.unit_scale, normals, result.illuminance,
+                  luminance(result.direct), luminance(result.indirect), areas=areas, **extra)
 
 
 def _compute(scene, args, points, normals):
@@ -425,9 +453,8 @@ def _view3d(scene, points, values, areas, label, screenshot, title=None) -> None
 def _run_illuminance(args) -> int:
     t0 = time.perf_counter()
     from ..workplane.metrics import readable, summary_line
-    from ..photometry import luminance
     from ..scene.scenefile import load_scene
-    from ..io.points import read_points, write_results
+    from ..io.points import read_points
 
     _check_run_files(args)
     scene = load_scene(args.scene)
@@ -435,8 +462,7 @@ def _run_illuminance(args) -> int:
     result, integ, options = _compute(scene, args, points, normals)
     stats = result.stats
     E = result.illuminance
-    write_results(args.output, points / scene.unit_scale, normals, E,
-                  luminance(result.direct), luminance(result.indirect), areas=areas)
+    _write_values(args, scene, points, normals, result, E, areas)
     thresholds = args.thresholds if args.thresholds is not None else [300.0, 500.0]
     doc = _report(args, scene, points, E, areas, "Illuminance", "lux", thresholds, {})
     seconds = time.perf_counter() - t0
@@ -472,7 +498,7 @@ def _run_daylight_factor(args) -> int:
     from ..workplane.metrics import daylight_factor, readable, summary_line, unobstructed_horizontal_illuminance
     from ..photometry import luminance
     from ..scene.scenefile import load_scene
-    from ..io.points import read_points, write_results
+    from ..io.points import read_points
 
     _check_run_files(args)
     scene = _overcast_scene(load_scene(args.scene), args.sky_illuminance, args.ground_reflectance)
@@ -482,8 +508,7 @@ def _run_daylight_factor(args) -> int:
     stats = result.stats
     E = result.illuminance
     DF = daylight_factor(E, E_h)
-    write_results(args.output, points / scene.unit_scale, normals, E,
-                  luminance(result.direct), luminance(result.indirect), daylight_factor=DF, areas=areas)
+    _write_values(args, scene, points, normals, result, DF, areas, daylight_factor=DF)
     thresholds = args.thresholds if args.thresholds is not None else [2.0]
     sky = {"sky": {"type": "cie-overcast", "horizontal_illuminance": args.sky_illuminance,
                    "unobstructed_horizontal_illuminance": E_h,

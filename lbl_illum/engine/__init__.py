@@ -17,4 +17,7 @@ __all__, __getattr__, __dir__ = public_surface(globals(), {
     "hemisphere": ("cell_counts", "stratified_directions"),
     "gradients": ("irradiance_gradients", "limit_gradients"),
     "render": ("RenderResult", "render_image", "image_options"),
+    "coefficients": ("CoefficientRecords",),
+    "annual_light": ("AnnualLight", "annual_light", "hour_scene", "shaded_scene", "sun_positions"),
+    "sun_hours": ("direct_sun_matrix",),
 })

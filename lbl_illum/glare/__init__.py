@@ -10,4 +10,5 @@ __all__, __getattr__, __dir__ = public_surface(globals(), {
                 "fisheye_geometry", "find_glare_sources", "position_index", "daylight_glare_probability",
                 "low_light_factor", "en17037_class", "dgp_category", "check_fisheye", "DGP_CONSTANTS",
                 "EVALGLARE_DGP_CONSTANTS", "EN17037_LIMITS", "DEFAULT_THRESHOLD", "SEARCH_ANGLE", "PEAK_LUMINANCE"),
+    "annual": ("AnnualGlare", "annual_glare", "patch_visibility", "PatchVisibility", "simplified_dgp"),
 })

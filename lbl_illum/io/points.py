@@ -69,7 +69,9 @@ def _lines(text: str):
 
 
 def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas: bool = False):
-    """Read a ``.pts`` file: ((n, 3) points [m], (n, 3) unit normals).
+    """Read a ``.pts`` file: ((n, 3) points [m], (n, 3) unit normals).  A Honeybee model
+    (``.hbjson``) gives the sensors of all its grids, in metres (``unit_scale`` is not
+    applied), each grid's identifier as their area name (:mod:`lbl_illum.scene.honeybee`).
 
     Coordinates are multiplied by ``unit_scale`` (metres per scene unit).  With
     ``with_areas=True`` a third item is returned: the (n,) area names (object array of
@@ -77,6 +79,15 @@ def read_points(path: str | os.PathLike, unit_scale: float = 1.0, *, with_areas:
     """
     path = Path(path)
     name = path.name or str(path)
+    if path.suffix.lower() == ".hbjson":           # a Honeybee model's sensor grids, in metres already
+        from ..scene.honeybee import read_grids
+
+        grids = read_grids(path, name)
+        P = np.concatenate([g.points for g in grids])
+        N = np.concatenate([g.normals for g in grids])
+        if with_areas:
+            return P, N, np.concatenate([np.full(len(g.points), g.identifier, object) for g in grids])
+        return P, N
     text = read_text_file(path, " points")
     rows, areas = [], []
     for number, line in _lines(text):

@@ -183,7 +183,8 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     sun, sky, warnings = daylight_from_dict(data, base_dir, where)
     warnings = material_warnings + warnings
     options = _options(_table(data, "settings", where, "[settings]"), f"{where}: [settings]", scale)
-    triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale, materials, warnings)
+    models: list = []                  # Honeybee models: their views and notes join the scene's
+    triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale, materials, warnings, units, models)
     used = set(np.unique(triangles.material).tolist())
     warnings += [f"{where}: [materials.{m.name}] is not used by any geometry"
                  for i, m in enumerate(materials) if i not in used]
@@ -194,6 +195,10 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
         raise InputError(f"{where}: 'find_openings' must be true or false, got {show(find_openings)}")
     views = _no_overflow(lambda: views_from_table(data.get("views"), where, scale), f"{where}: [views]",
                          "the views")
+    for model in models:
+        warnings += model.warnings
+        for name, view in model.views.items():
+            views.setdefault(name, view)
     luminaires = luminaires_from_table(data.get("luminaires"), where, base_dir, scale)
     photometries = {id(lum.photometry): lum.photometry for lum in luminaires}
     warnings += [note for photometry in photometries.values() for note in photometry.notes]
@@ -464,7 +469,7 @@ class _Chunk:
 
 
 def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials: list[Material],
-              warnings: list[str]) -> Triangles:
+              warnings: list[str], units: str = "m", models: list | None = None) -> Triangles:
     """All triangles of the ``[[geometry]]`` entries, cleaned (see :func:`_assemble`).
 
     Radiance files (``.rad``, ``.mat``) are read first, all of them, for their modifier
@@ -476,7 +481,7 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
     if not isinstance(entries, (list, tuple)):
         raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {show(entries)}")
     ids = {m.name: i for i, m in enumerate(materials)}
-    radiance = _radiance_files(entries, where, base_dir)
+    radiance = _radiance_files(entries, where, base_dir, units, models)
     chunks, centers, radii = [], [], []
     for i, entry in enumerate(entries):
         label = f"{where}: geometry[{i}]"
@@ -511,18 +516,27 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
 RADIANCE_SUFFIXES = (".rad", ".mat")
 
 
-def _radiance_files(entries, where: str, base_dir: Path) -> dict:
-    """{entry index: (primitives, label)} of the entries that name Radiance files."""
+def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", models: list | None = None) -> dict:
+    """{entry index: (primitives, label)} of the entries that name Radiance files or
+    Honeybee models (those appended to ``models``: their views and warnings)."""
+    from .honeybee import HONEYBEE_SUFFIXES, read_honeybee
     from .radfile import read_rad
+
+    models = [] if models is None else models
 
     out = {}
     for i, entry in enumerate(entries):
         if isinstance(entry, Mapping) and isinstance(entry.get("file"), str) and "shape" not in entry \
-                and Path(entry["file"]).suffix.lower() in RADIANCE_SUFFIXES:
+                and Path(entry["file"]).suffix.lower() in RADIANCE_SUFFIXES + HONEYBEE_SUFFIXES:
             label = f"{where}: geometry[{i}]"
             check_keys(entry, FILE_KEYS, label)
             label = f"{label} {entry['file']}"
-            out[i] = (read_rad(base_dir / entry["file"], label), label)
+            if Path(entry["file"]).suffix.lower() in HONEYBEE_SUFFIXES:
+                model = read_honeybee(base_dir / entry["file"], label, units)
+                out[i] = (model.primitives, label)
+                models.append(model)
+            else:
+                out[i] = (read_rad(base_dir / entry["file"], label), label)
     return out
 
 

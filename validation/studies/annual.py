@@ -46,12 +46,10 @@ from pathlib import Path
 import numpy as np
 
 from lbl_illum import Options, load_scene, read_points
-from lbl_illum.daylight.skymatrix import sky_matrix
-from lbl_illum.daylight.weather import read_weather
-from lbl_illum.engine.annual_light import annual_light, hour_scene
-from lbl_illum.engine.integrator import Integrator
+from lbl_illum.daylight import read_weather, sky_matrix
+from lbl_illum.engine import Integrator, annual_light, hour_scene
 from lbl_illum.photometry import luminance
-from lbl_illum.workplane.annual import annual_metrics, annual_summary, lm83_occupancy
+from lbl_illum.workplane import annual_metrics, annual_summary, lm83_occupancy
 
 from . import repository_root
 from .report import Report, StudyContext, fmt, new_figure, pct
@@ -170,7 +168,7 @@ def _glare(ctx, scene, views, eyes, full, n, matrix, cfg) -> list[dict]:
     against rendered fisheyes of those hours."""
     from lbl_illum.engine import image_options, render_image
     from lbl_illum.glare import evaluate_glare
-    from lbl_illum.glare.annual import annual_glare, patch_visibility
+    from lbl_illum.glare import annual_glare, patch_visibility
 
     side, preset, spp = cfg["image"]
     out = []
