@@ -1,7 +1,7 @@
 """``lbl-illum annual``: a year of daylight at a sensor grid from the cache's daylight
 coefficients, and the annual metrics of IES LM-83, LEED v4.1 and EN 17037.
 
-The command's side of :mod:`lbl_illum.engine.annual_light` (the light) and
+The command's side of :mod:`lbl_illum.engine.annual` (the light) and
 :mod:`lbl_illum.workplane.annual` (the metrics): its arguments, the checks made before
 any work, the files of OUTDIR (each written whole or not at all) and the one line it
 prints.  See docs/annual.md.
@@ -127,7 +127,7 @@ def annual_command(args) -> int:
 
     from ..daylight.skymatrix import sky_matrix
     from ..daylight.weather import read_weather
-    from ..engine.annual_light import annual_light
+    from ..engine.annual import annual_light
     from ..io.files import atomic_write_bytes, atomic_write_text
     from ..io.points import read_points
     from ..scene.scenefile import load_scene
@@ -163,7 +163,7 @@ def annual_command(args) -> int:
     if not args.preset:
         args.preset = ANNUAL_PRESET
     options = run_options(scene, args)
-    from ..engine.annual_light import shaded_scene
+    from ..engine.annual import shaded_scene
 
     shades = {}
     for name, materials in _shade_groups(args).items():

@@ -658,6 +658,8 @@ class PerezSky(Sky):
     clearness, brightness : ε (≥ 1) and Δ (≥ 0)
     direct_normal_illuminance : [lux] the direct normal illuminance that goes with the sky
         (for the scene's sun; it does not enter the luminance)
+    coefficients_given : (a, b, c, d, e) to use instead of those of ε, Δ and the sun
+        (a sky written by Radiance's ``gendaylit``: :meth:`from_coefficients`)
     """
 
     sun_altitude: float = 45.0
@@ -665,6 +667,7 @@ class PerezSky(Sky):
     clearness: float = 1.0
     brightness: float = 0.2
     direct_normal_illuminance: float = 0.0
+    coefficients_given: tuple | None = None
     _coef: tuple = field(init=False, default=(), repr=False, compare=False)
     _sun: Any = field(init=False, default=None, repr=False, compare=False)
     _scale: float = field(init=False, default=0.0, repr=False, compare=False)
@@ -678,8 +681,11 @@ class PerezSky(Sky):
         _check_finite(self, "clearness", minimum=1.0)
         _check_finite(self, "brightness", minimum=0.0)
         _check_finite(self, "direct_normal_illuminance", minimum=0.0)
-        _set(self, _sun=sun_vector(self.sun_altitude, self.sun_azimuth),
-             _coef=perez_coefficients(self.clearness, self.brightness, 90.0 - self.sun_altitude))
+        coef = (tuple(float(v) for v in self.coefficients_given) if self.coefficients_given is not None else
+                perez_coefficients(self.clearness, self.brightness, 90.0 - self.sun_altitude))
+        if len(coef) != 5 or not all(math.isfinite(v) for v in coef):
+            raise ValueError(f"PerezSky: coefficients_given must be five finite numbers, got {self.coefficients_given!r}")
+        _set(self, _sun=sun_vector(self.sun_altitude, self.sun_azimuth), _coef=coef)
         scale = 0.0
         if self.horizontal_illuminance > 0.0:
             integral = hemisphere_integral(self.relative_luminance)
@@ -694,6 +700,18 @@ class PerezSky(Sky):
     def coefficients(self) -> tuple[float, float, float, float, float]:
         """(a, b, c, d, e)."""
         return self._coef
+
+    @classmethod
+    def from_coefficients(cls, coefficients, sun_altitude: float, sun_azimuth: float, scale: float,
+                          sun_horizontal_illuminance: float = 0.0, ground_reflectance: float = 0.2) -> "PerezSky":
+        """The sky L = ``scale`` · lv of the Perez coefficients (a, b, c, d, e) given, as
+        ``gendaylit`` writes it for ``perezlum.cal`` (``scale`` [cd/m²], its diffuse
+        normalisation times 179 and the glow's colour)."""
+        unit = cls(horizontal_illuminance=1.0, sun_altitude=sun_altitude, sun_azimuth=sun_azimuth,
+                   coefficients_given=tuple(coefficients))
+        return cls(horizontal_illuminance=float(scale) / unit.luminance_scale, ground_reflectance=ground_reflectance,
+                   sun_horizontal_illuminance=sun_horizontal_illuminance, sun_altitude=sun_altitude,
+                   sun_azimuth=sun_azimuth, coefficients_given=tuple(coefficients))
 
     @property
     def luminance_scale(self) -> float:
@@ -710,14 +728,19 @@ class PerezSky(Sky):
 
     @property
     def label(self) -> str:
+        if self.coefficients_given is not None:
+            return (f"Perez sky of coefficients {', '.join(f'{v:.4g}' for v in self._coef)}, diffuse horizontal "
+                    f"{self.horizontal_illuminance:.6g} lux, sun at altitude {self.sun_altitude:.4g}°, azimuth "
+                    f"{self.sun_azimuth:.4g}°")
         return (f"Perez sky, ε {self.clearness:.4g}, Δ {self.brightness:.4g}, diffuse horizontal "
                 f"{self.horizontal_illuminance:.6g} lux, sun at altitude {self.sun_altitude:.4g}°, "
                 f"azimuth {self.sun_azimuth:.4g}°")
 
     @property
     def parameters(self) -> dict:
+        extra = {} if self.coefficients_given is None else {"coefficients": [float(v) for v in self._coef]}
         return {**super().parameters, "clearness": float(self.clearness), "brightness": float(self.brightness),
-                "sun_altitude": float(self.sun_altitude), "sun_azimuth": float(self.sun_azimuth)}
+                "sun_altitude": float(self.sun_altitude), "sun_azimuth": float(self.sun_azimuth), **extra}
 
     def relative_luminance(self, directions: np.ndarray) -> np.ndarray:
         """lv along (m, 3) directions above the horizon (not normalised)."""

@@ -18,6 +18,6 @@ __all__, __getattr__, __dir__ = public_surface(globals(), {
     "gradients": ("irradiance_gradients", "limit_gradients"),
     "render": ("RenderResult", "render_image", "image_options"),
     "coefficients": ("CoefficientRecords",),
-    "annual_light": ("AnnualLight", "annual_light", "hour_scene", "shaded_scene", "sun_positions"),
+    "annual": ("AnnualLight", "annual_light", "hour_scene", "shaded_scene", "sun_positions"),
     "sun_hours": ("direct_sun_matrix",),
 })

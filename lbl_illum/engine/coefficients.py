@@ -7,7 +7,7 @@ each source, through every bounce below it.  The sources are
 
 * the sky patches p of a Tregenza/Reinhart sky of subdivision MF (row 0 the ground glow,
   :func:`lbl_illum.daylight.skymatrix.sky_patches`), per unit luminance [cd/m²];
-* J sun positions (unit vectors, the caller's: :func:`lbl_illum.engine.annual_light.sun_positions`),
+* J sun positions (unit vectors, the caller's: :func:`lbl_illum.engine.annual.sun_positions`),
   per unit direct normal illuminance [lux], for the sun's *interreflected* light only (its
   direct light at the sensors is computed exactly for each hour,
   :mod:`lbl_illum.engine.sun_hours`).

@@ -5,7 +5,7 @@ its sources (docs/glare.md, "Annual glare").
 For a view (eye at P looking along d, a 180° field as evalglare's fisheyes):
 
 * **E_v**, the vertical illuminance at the eye, for every hour: the annual calculation at a
-  sensor at P with its normal along d (:func:`lbl_illum.engine.annual_light.annual_light`:
+  sensor at P with its normal along d (:func:`lbl_illum.engine.annual.annual_light`:
   sky patches and interreflected sun through the coefficients, the direct sun traced).
 * **DGPs**, the simplified DGP of Wienold (2009): 6.22e-5 E_v + 0.184, for every hour.
 * **DGP with sources**, Wienold & Christoffersen (2006) with the low-light correction

@@ -11,5 +11,6 @@ __all__, __getattr__, __dir__ = public_surface(globals(), {
     "images": ("read_image", "write_image", "write_png", "preview_pixels"),
     "cachefile": ("attach_cache_file", "load_cache", "save_cache"),
     "radiance": ("export_radiance", "to_radiance", "ambient_options", "illuminance_from_rtrace", "radiance_programs",
-                 "RADIANCE_EFFICACY", "RADIANCE_RGB_WEIGHTS"),
+                 "material_primitive", "radiance_name", "RADIANCE_EFFICACY", "RADIANCE_RGB_WEIGHTS"),
+    "honeybee_results": ("write_res_folder", "write_annual_folder"),
 })

@@ -184,7 +184,17 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: str | Path, where: str) -
     warnings = material_warnings + warnings
     options = _options(_table(data, "settings", where, "[settings]"), f"{where}: [settings]", scale)
     models: list = []                  # Honeybee models: their views and notes join the scene's
-    triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale, materials, warnings, units, models)
+    primitives: list = []              # every Radiance primitive read: a sky and sun they describe
+    triangles = _geometry(data.get("geometry"), where, Path(base_dir), scale, materials, warnings, units, models,
+                          primitives)
+    if "sky" not in data and "sun" not in data and primitives:
+        from .radsky import radiance_daylight
+
+        found = radiance_daylight(primitives, where)
+        if found is not None:
+            sky = found[0] if found[0] is not None else sky
+            sun = found[1]
+            warnings.append(f"{where}: no [sky] or [sun]: {found[2]} of the Radiance files is used")
     used = set(np.unique(triangles.material).tolist())
     warnings += [f"{where}: [materials.{m.name}] is not used by any geometry"
                  for i, m in enumerate(materials) if i not in used]
@@ -469,7 +479,8 @@ class _Chunk:
 
 
 def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials: list[Material],
-              warnings: list[str], units: str = "m", models: list | None = None) -> Triangles:
+              warnings: list[str], units: str = "m", models: list | None = None,
+              primitives: list | None = None) -> Triangles:
     """All triangles of the ``[[geometry]]`` entries, cleaned (see :func:`_assemble`).
 
     Radiance files (``.rad``, ``.mat``) are read first, all of them, for their modifier
@@ -482,6 +493,8 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
         raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {show(entries)}")
     ids = {m.name: i for i, m in enumerate(materials)}
     radiance = _radiance_files(entries, where, base_dir, units, models)
+    if primitives is not None:
+        primitives += [p for prims, _ in radiance.values() for p in prims]
     chunks, centers, radii = [], [], []
     for i, entry in enumerate(entries):
         label = f"{where}: geometry[{i}]"

@@ -216,23 +216,30 @@ def _design(ctx, scene, points, normals, weather, options, matrix, hours) -> lis
 
 
 def _radiance(ctx, root, points, normals, occupancy, year, hours) -> dict | None:
-    try:
-        from . import annual_radiance
-    except ImportError:
-        return None
+    """Radiance's two-phase year (``annual_radiance.two_phase`` at its converged settings):
+    the classic total (the sun in 4 sky patches) and the total with the direct sun traced
+    to each hour's own position, as ours; metrics from the latter and the direct sun."""
+    from . import annual_radiance
+
     if annual_radiance.unavailable() is not None:
         return None
     with tempfile.TemporaryDirectory() as tmp:
         out = annual_radiance.two_phase(root / "examples" / "office" / "scene.toml", points, normals,
                                         root / "examples" / "weather" / EPW, Path(tmp))
     ctx.step("Radiance two-phase")
-    theirs = annual_summary(annual_metrics(out["illuminance"], occupancy, direct_sun=out["direct_sun"]))["overall"]
-    hourly = [{"row": r["row"], "kind": r["kind"], "radiance_mean": float(out["illuminance"][:, r["row"]].mean()),
+    exact = out["illuminance_exact_sun"]
+    theirs = annual_summary(annual_metrics(exact, occupancy, direct_sun=out["direct_sun"]))["overall"]
+    hourly = [{"row": r["row"], "kind": r["kind"], "radiance_mean": float(exact[:, r["row"]].mean()),
+               "radiance_classic_mean": float(out["illuminance"][:, r["row"]].mean()),
                "annual_mean": r["annual_mean"], "point_in_time_mean": r["reference_mean"]} for r in hours]
+    per_point = year.illuminance.sum(axis=1) / exact.sum(axis=1) - 1.0
     lit = out["direct_sun"] > 0.0
     return {"sda": theirs["sda"], "ase": theirs["ase"], "da": theirs["da"], "udi_useful": theirs["udi"]["useful"],
             "seconds": out["seconds"], "settings": out.get("settings"), "commands": out.get("commands"),
-            "annual_sum_ratio": float(year.illuminance.sum() / out["illuminance"].sum()),
+            "annual_sum_ratio": float(year.illuminance.sum() / exact.sum()),
+            "classic_sum_ratio": float(year.illuminance.sum() / out["illuminance"].sum()),
+            "per_point_sum_error": {"mean_abs": float(np.abs(per_point).mean()), "min": float(per_point.min()),
+                                    "max": float(per_point.max())},
             "direct_sum_ratio": float(year.direct_sun[lit].sum() / out["direct_sun"][lit].sum()) if lit.any() else None,
             "hours": hourly}
 
@@ -317,12 +324,16 @@ def _write(rep: Report, res: dict, year) -> None:
     rep.table(["", "sDA300/50% [% of points]", "ASE1000,250 [% of points]", "mean DA300 [%]",
                "mean UDI 100–3000 [%]"], rows)
     if rad:
-        rep.text(f"Radiance: {rad['seconds']:.0f} s ({rad.get('settings')}). Sum of the year's illuminance, ours / "
-                 f"Radiance's: {rad['annual_sum_ratio']:.4f}; of the direct sun where Radiance's is lit: "
-                 f"{fmt(rad['direct_sum_ratio'], 4)}.")
-        rep.table(["row", "kind", "point-in-time mean", "annual mean", "Radiance two-phase mean"],
+        e = rad["per_point_sum_error"]
+        rep.text(f"Radiance: {rad['seconds']:.0f} s for the year ({rad.get('settings')}). The year's illuminance "
+                 f"summed over every point and hour, ours / Radiance's with the direct sun traced hour by hour as "
+                 f"ours: {rad['annual_sum_ratio']:.4f} (each point's sum: mean |difference| {pct(e['mean_abs'])}, "
+                 f"{pct(e['min'])} to {pct(e['max'])}); ours / Radiance's classic two-phase (the sun in 4 sky "
+                 f"patches): {rad['classic_sum_ratio']:.4f}; the direct sun where Radiance's is lit: "
+                 f"{fmt(rad['direct_sum_ratio'], 4)} (its suns are gendaymtx's positions, about 0.45° from ours).")
+        rep.table(["row", "kind", "point-in-time mean", "annual mean", "Radiance, exact sun", "Radiance, classic"],
                   [[str(h["row"]), h["kind"], fmt(h["point_in_time_mean"], 5), fmt(h["annual_mean"], 5),
-                    fmt(h["radiance_mean"], 5)] for h in rad["hours"]])
+                    fmt(h["radiance_mean"], 5), fmt(h["radiance_classic_mean"], 5)] for h in rad["hours"]])
     else:
         rep.text("Radiance's programs were not run here (not installed, or the quick version).")
     if res["glare"]:

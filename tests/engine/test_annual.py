@@ -1,4 +1,4 @@
-"""A year from the cache's daylight coefficients (lbl_illum.engine.annual_light) against
+"""A year from the cache's daylight coefficients (lbl_illum.engine.annual) against
 point-in-time runs of the engine under the same hours' Perez skies and suns."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pytest
 
 from lbl_illum.daylight.skymatrix import sky_matrix
 from lbl_illum.daylight.weather import read_weather
-from lbl_illum.engine.annual_light import annual_light, hour_scene, shaded_scene, sun_positions
+from lbl_illum.engine.annual import annual_light, hour_scene, shaded_scene, sun_positions
 from lbl_illum.engine.integrator import Integrator
 from lbl_illum.options import Options
 
