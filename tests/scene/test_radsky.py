@@ -110,3 +110,76 @@ def test_horizontal_illuminance_as_rtrace_gives_it(tmp_path, sky):
     ours = Integrator(scene, Options(bounces=0, samples=4096, accuracy=0.0)).compute(
         np.array([[0, 0, 0.1]]), np.array([[0, 0, 1.0]])).illuminance[0]
     assert ours == pytest.approx(theirs, rel=0.005)
+
+
+PRIMITIVES = """void plastic grey
+0
+0
+5 .5 .5 .5 0 0
+void plastic white
+0
+0
+5 .8 .8 .8 0 0
+grey polygon floor
+0
+0
+12 -20 -20 0 20 -20 0 20 20 0 -20 20 0
+white sphere ball
+0
+0
+4 0 2 1 0.6
+white bubble dome
+0
+0
+4 -2 -2 2 0.5
+white cylinder pillar
+0
+0
+7 2 0 0 2 0 2.5 0.3
+white tube pipe
+0
+0
+7 -2 1 0.5 -2 3 0.5 0.2
+white cone spike
+0
+0
+8 1 -2 0 1 -2 1.5 0.5 0
+white cup funnel
+0
+0
+8 -1 -3 0.2 -1 -3 1.2 0.4 0.1
+white ring disc
+0
+0
+8 0 0 2.5 0 0 -1 0 1.2
+"""
+
+
+def test_every_primitive_against_rtrace(tmp_path):
+    """The surfaces of every primitive read, under gensky's clear sky and sun: the
+    illuminance at six points among them (under the ring's shadow, facing the sphere, under
+    the ring) within 3 % of rtrace's on the same file (measured: 0.9 % at most).  Four
+    bounces both (rtrace -ab 4 reflects the sun four times as our four levels do; it counts
+    the sky seen as one, which the open scene makes negligible)."""
+    oconv, rtrace = radiance_tool("oconv"), radiance_tool("rtrace")
+    if oconv is None or rtrace is None:
+        pytest.skip("Radiance's oconv and rtrace are not installed (pip install pyradiance)")
+    from lbl_illum.io import radiance_programs
+
+    env = radiance_programs()["env"]
+    (tmp_path / "sky.rad").write_text(GENSKY + GLOWS)
+    (tmp_path / "room.rad").write_text(PRIMITIVES)
+    (tmp_path / "scene.toml").write_text('[[geometry]]\nfile = "sky.rad"\n[[geometry]]\nfile = "room.rad"\n')
+    points = np.array([[0.5, 0.5, 0.01], [0.0, 1.0, 0.01], [1.5, 0.2, 0.01], [-1.5, -2.5, 0.01], [0.0, 0.0, 2.4],
+                       [0.3, 2.0, 0.3]])
+    normals = np.array([[0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 0, -1], [1, 0, 0]], float)
+    with open(tmp_path / "s.oct", "wb") as out:
+        subprocess.run([oconv, "sky.rad", "room.rad"], cwd=tmp_path, env=env, stdout=out, check=True)
+    text = "".join(f"{p[0]} {p[1]} {p[2]} {n[0]} {n[1]} {n[2]}\n" for p, n in zip(points, normals))
+    run = subprocess.run([rtrace, "-h", "-I", "-ab", "4", "-ad", "4096", "-aa", "0", "-lw", "1e-6", "s.oct"],
+                         cwd=tmp_path, env=env, input=text, capture_output=True, text=True, check=True)
+    rgb = np.array([[float(v) for v in line.split()[:3]] for line in run.stdout.strip().splitlines()])
+    theirs = 179 * rgb @ np.array([0.265, 0.670, 0.065])
+    scene = load_scene(tmp_path / "scene.toml")
+    ours = Integrator(scene, Options(bounces=4, samples=4096, accuracy=0.0)).compute(points, normals).illuminance
+    np.testing.assert_allclose(ours, theirs, rtol=0.03)
