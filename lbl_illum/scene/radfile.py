@@ -69,6 +69,9 @@ PATTERN_TYPES = frozenset(("texfunc", "texdata", "colorfunc", "brightfunc", "col
                            "colorpict", "colortext", "brighttext", "specfunc", "specdata", "specpict"))
 #: Mixtures of two modifiers: the first one is taken.
 MIXTURE_TYPES = frozenset(("mixfunc", "mixdata", "mixpict", "mixtext"))
+#: Radiance's other primitive types (skipped with a warning); a type in none of these sets
+#: is no Radiance primitive at all (a typing error) and is refused.
+OTHER_SURFACES = frozenset(("source", "instance", "mesh"))
 _REAL_COUNTS = {"sphere": (4,), "bubble": (4,), "cylinder": (7,), "tube": (7,), "cone": (8,), "cup": (8,),
                 "ring": (8,)}
 
@@ -394,6 +397,9 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
                 quadric_tris.append((p.modifier, tri))
                 order.setdefault(p.modifier)
         elif p.kind not in MATERIAL_TYPES and p.kind not in OTHER_MODIFIERS and p.kind != "alias":
+            if p.kind not in OTHER_SURFACES | PATTERN_TYPES | MIXTURE_TYPES:
+                raise InputError(f"{where}: line {p.line}: '{p.kind}' is not a Radiance primitive type "
+                                 f"({p.modifier} {p.kind} {p.name})")
             skipped[p.kind] = skipped.get(p.kind, 0) + 1
     if warnings is not None and skipped:
         what = ", ".join(f"{count} '{kind}'" for kind, count in skipped.items())

@@ -411,3 +411,13 @@ def test_other_brtdfunc_forms_are_refused(tmp_path):
     _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "w.rad"\n')
     with pytest.raises(InputError, match=r"BRTDfunc 'odd': this BRTDfunc's form is not read"):
         load_scene(tmp_path / "scene.toml")
+
+
+def test_a_type_that_is_no_radiance_primitive_is_refused(tmp_path):
+    _write(tmp_path, "typo.rad", "void plastic m\n0\n0\n5 .5 .5 .5 0 0\nm polygn p\n0\n0\n9 0 0 0 1 0 0 0 1 0\n")
+    with pytest.raises(InputError, match=r"^typo.rad: line 5: 'polygn' is not a Radiance primitive type"):
+        read_rad_surfaces(tmp_path / "typo.rad", "typo.rad")
+    _write(tmp_path, "inst.rad", "void plastic m\n0\n0\n5 .5 .5 .5 0 0\nm instance chair\n1 chair.oct\n0\n0\n")
+    warnings = []
+    read_rad_surfaces(tmp_path / "inst.rad", "inst.rad", warnings=warnings)
+    assert any("skipped 1 'instance' primitive" in w for w in warnings)
