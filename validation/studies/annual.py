@@ -17,6 +17,9 @@ The bundled office (77 sensors) and the Oakland typical year (`examples/weather`
 * **Which sky places the records.**  At the sunny hours, the annual result with the records
   placed under that hour's own sky and sun, against the overcast placement the command
   uses (full version only).
+* **Radiance at the sampled hours.**  `gendaylit` with the hour's sun and illuminance and
+  `rtrace` at converged settings on the exported office, against the annual result and
+  the point-in-time run (full version only).
 * **Radiance's two-phase method.**  With Radiance's programs at hand (the pyradiance
   wheel): `gendaymtx` + `rcontrib` + `dctimestep` on the exported office at settings
   that converge (`validation/studies/annual_radiance.py`), and the direct sun by
@@ -105,7 +108,7 @@ def run(ctx: StudyContext) -> Report:
     weather = read_weather(root / "examples" / "weather" / EPW)
     options = cfg["options"]
     hours_planned = sum(cfg["hours"].values())
-    ctx.plan(1 + hours_planned + (3 if cfg["design"] else 0) + (1 if cfg["radiance"] else 0)
+    ctx.plan(1 + hours_planned + (3 if cfg["design"] else 0) + (1 + hours_planned if cfg["radiance"] else 0)
              + (1 if cfg["command"] else 0) + sum(cfg["glare"].values()))
     matrix = sky_matrix(weather, sun="separate")
     views = {name: scene.views[name] for name in cfg["glare"]}
@@ -130,6 +133,7 @@ def run(ctx: StudyContext) -> Report:
                                "udi_useful": ours["udi"]["useful"]}}
     if cfg["radiance"]:
         res["radiance"] = _radiance(ctx, root, points, normals, occupancy, year, res["hours"])
+        res["rtrace_hours"] = _rtrace_hours(ctx, root, scene, points, normals, matrix, res["hours"])
     res["glare"] = _glare(ctx, scene, views, eyes, full, n, matrix, cfg)
     if cfg["command"]:
         res["command"] = _command(ctx, root)
@@ -244,6 +248,69 @@ def _radiance(ctx, root, points, normals, occupancy, year, hours) -> dict | None
             "hours": hourly}
 
 
+#: rtrace at the sampled hours: every bounce the two-phase reference follows, -ad as its
+#: convergence table gives well under 1 % per hour.  rtrace's direct light from the sun is
+#: one ray to the disk's centre (-ds does not divide distant sources); the sun's disk is
+#: then averaged over DISK_RAYS jittered rays per sensor (-ab 0 -dj 1; with 64 the hour's mean
+#: still moved by 2.4 % from run to run) in place of it: at
+#: one summer noon a row of the office's sensors lies in the penumbra of the window head's
+#: reveal (1 of 8 rays on the disk's rim blocked), which the centre alone reads lit whole.
+RTRACE_OPTIONS = ["-ab", "11", "-ad", "16384", "-aa", "0", "-lw", "5e-6", "-lr", "-24"]
+DISK_RAYS = 1024
+GLOWS = ("skyfunc glow skyglow\n0\n0\n4 1 1 1 0\nskyglow source sky\n0\n0\n4 0 0 1 180\n"
+         "skyfunc glow groundglow\n0\n0\n4 1 1 1 0\ngroundglow source ground\n0\n0\n4 0 0 -1 180\n")
+
+
+def _rtrace_hours(ctx, root, scene, points, normals, matrix, hours) -> list[dict] | None:
+    """Each sampled hour by Radiance itself: ``gendaylit -ang`` (the hour's sun; azimuth
+    west of south) ``-L`` (the matrix's direct normal and diffuse horizontal illuminance,
+    so that both skies have the same brightness and only the model of its shape is
+    Radiance's) with the ground reflectance ``-g``, and ``rtrace`` at
+    :data:`RTRACE_OPTIONS` on the exported office."""
+    from lbl_illum.io import export_radiance, radiance_programs
+
+    from . import annual_radiance
+
+    if annual_radiance.unavailable() is not None or annual_radiance.radiance_bin("gendaylit") is None:
+        return None
+    env = radiance_programs()["env"]
+    binary = {name: str(annual_radiance.radiance_bin(name)) for name in ("gendaylit", "oconv", "rtrace")}
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        export_radiance(scene, folder, points, normals)
+        text = "".join(" ".join(f"{float(v):.9g}" for v in (*p, *n)) + "\n" for p, n in zip(points, normals))
+        for r in hours:
+            h = r["row"]
+            sky = subprocess.run([binary["gendaylit"], "-ang", f"{matrix.sun_altitude[h]:.4f}",
+                                  f"{matrix.sun_azimuth[h] - 180.0:.4f}", "-g", f"{matrix.ground_reflectance:g}", "-L",
+                                  f"{matrix.direct_normal_illuminance[h]:.3f}",
+                                  f"{matrix.diffuse_horizontal_illuminance[h]:.3f}"],
+                                 cwd=folder, env=env, capture_output=True, text=True, check=True).stdout
+            (folder / "hour.rad").write_text(sky + GLOWS)
+            with open(folder / "hour.oct", "wb") as octree:
+                subprocess.run([binary["oconv"], "materials.rad", "hour.rad", "geometry.rad"], cwd=folder, env=env,
+                               stdout=octree, check=True)
+            t = time.perf_counter()
+
+            def rtrace(options, lines):
+                run = subprocess.run([binary["rtrace"], "-h", "-I", "-n", "2", *options, "hour.oct"], cwd=folder,
+                                     env=env, input=lines, capture_output=True, text=True, check=True)
+                rgb = np.array([[float(v) for v in line.split()[:3]] for line in run.stdout.strip().splitlines()])
+                return 179.0 * rgb @ np.array([0.265, 0.670, 0.065])
+
+            total = rtrace(RTRACE_OPTIONS, text)
+            centre = rtrace(["-ab", "0"], text)
+            disk = rtrace(["-ab", "0", "-dj", "1"], "".join(line + "\n" for line in text.splitlines()
+                                                            for _ in range(DISK_RAYS)))
+            E = total - centre + disk.reshape(len(points), DISK_RAYS).mean(axis=1)
+            ctx.step(f"rtrace: row {h}")
+            out.append({"row": h, "kind": r["kind"], "rtrace_mean": float(E.mean()), "annual_mean": r["annual_mean"],
+                        "point_in_time_mean": r["reference_mean"], "seconds": time.perf_counter() - t,
+                        "annual_error": r["annual_mean"] / float(E.mean()) - 1.0})
+    return out
+
+
 def _command(ctx, root) -> dict:
     """The whole command as a user types it (kernels compiled by the runs before)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -276,6 +343,8 @@ def checks(res: dict) -> list[dict]:
     if rad:
         add("|sDA − Radiance two-phase| [points]", abs(res["metrics"]["ours"]["sda"] - rad["sda"]), METRIC_BOUND)
         add("|ASE − Radiance| [points]", abs(res["metrics"]["ours"]["ase"] - rad["ase"]), METRIC_BOUND)
+    for r in res.get("rtrace_hours") or []:
+        add(f"row {r['row']} ({r['kind']}): |annual / rtrace − 1|", abs(r["annual_error"]), HOURLY_BOUND)
     return out
 
 
@@ -336,6 +405,18 @@ def _write(rep: Report, res: dict, year) -> None:
                     fmt(h["radiance_mean"], 5), fmt(h["radiance_classic_mean"], 5)] for h in rad["hours"]])
     else:
         rep.text("Radiance's programs were not run here (not installed, or the quick version).")
+    if res.get("rtrace_hours"):
+        rep.heading("The sampled hours by Radiance's gendaylit and rtrace")
+        rep.table(["row", "kind", "rtrace mean [lux]", "annual mean [lux]", "annual / rtrace − 1",
+                   "point-in-time mean [lux]", "rtrace seconds"],
+                  [[str(r["row"]), r["kind"], fmt(r["rtrace_mean"], 5), fmt(r["annual_mean"], 5),
+                    pct(r["annual_error"]), fmt(r["point_in_time_mean"], 5), f"{r['seconds']:.0f}"]
+                   for r in res["rtrace_hours"]])
+        rep.text("`gendaylit -ang` with the hour's sun and `-L` with the sky matrix's direct normal and diffuse "
+                 "horizontal illuminance (the same brightness; the sky's shape by Radiance's own Perez model), "
+                 f"ground reflectance as ours; `rtrace {' '.join(RTRACE_OPTIONS)}` on the exported office, its "
+                 f"direct sun (one ray to the disk's centre) replaced by the mean of {DISK_RAYS} rays jittered over "
+                 "the disk (`-ab 0 -dj 1`).")
     if res["glare"]:
         rep.heading("Annual glare against rendered fisheyes")
         rep.table(["view", "row", "sun alt, az [°]", "sun in view", "patch sources", "E_v annual / fisheye [lux]",
