@@ -811,7 +811,8 @@ def write_point_table(path: str | os.PathLike, points, m: AnnualMetrics) -> None
     Columns: ``x,y,z`` (as given), ``DA300``, ``cDA300``, ``UDI<100``, ``UDI100-300``,
     ``UDI300-3000``, ``UDI100-3000``, ``UDI>3000`` [% of occupied hours] with the shades
     open (names follow the threshold and UDI limits), ``ASE1000_hours`` [h] with direct
-    sun, ``DA300_shaded``, ``cDA300_shaded``, ``UDI100-3000_shaded`` with operated shades,
+    sun, ``DA300_shaded``, ``cDA300_shaded``, ``UDI<100_shaded``, ``UDI100-3000_shaded``,
+    ``UDI>3000_shaded`` with operated shades,
     and ``area`` last when any point has a name.  Values keep 6 significant digits.
     """
     xyz = np.asarray(points, dtype=np.float64)
@@ -827,7 +828,8 @@ def write_point_table(path: str | os.PathLike, points, m: AnnualMetrics) -> None
         cols[f"ASE{SUN_THRESHOLD:g}_hours"] = m.ase_hours
     if m.shaded is not None:
         s = m.shaded
-        cols.update({f"DA{t}_shaded": s.da, f"cDA{t}_shaded": s.cda, f"UDI{low}-{high}_shaded": s.udi_useful})
+        cols.update({f"DA{t}_shaded": s.da, f"cDA{t}_shaded": s.cda, f"UDI<{low}_shaded": s.udi_fell_short,
+                     f"UDI{low}-{high}_shaded": s.udi_useful, f"UDI>{high}_shaded": s.udi_exceeded})
     named = any(m.areas)
     table = np.column_stack(list(cols.values()))
     lines = [",".join(list(cols) + (["area"] if named else []))]

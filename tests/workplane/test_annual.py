@@ -453,7 +453,8 @@ def test_point_table(tmp_path):
     write_point_table(path, xyz, m)
     rows = list(csv.reader(path.open()))
     assert rows[0] == ["x", "y", "z", "DA300", "cDA300", "UDI<100", "UDI100-300", "UDI300-3000", "UDI100-3000",
-                       "UDI>3000", "ASE1000_hours", "DA300_shaded", "cDA300_shaded", "UDI100-3000_shaded", "area"]
+                       "UDI>3000", "ASE1000_hours", "DA300_shaded", "cDA300_shaded", "UDI<100_shaded",
+                       "UDI100-3000_shaded", "UDI>3000_shaded", "area"]
     assert len(rows) == P + 1 and rows[1][-1] == "a" and rows[-1][-1] == "b"
     first = [float(v) for v in rows[1][:-1]]
     assert first[:3] == [0.0, 0.0, 0.8]
