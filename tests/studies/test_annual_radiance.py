@@ -19,7 +19,7 @@ from lbl_illum import load_scene, read_points
 from lbl_illum.daylight.skymatrix import sky_matrix
 from lbl_illum.daylight.weather import read_weather
 from lbl_illum.engine.integrator import Integrator
-from lbl_illum.engine.sun_hours import direct_sun_matrix
+from lbl_illum.engine.sun_hours import sun_visibility
 from lbl_illum.io.radiance import export_radiance
 from lbl_illum.workplane.annual import annual_metrics, annual_summary, lm83_occupancy
 from lbl_illum_studies import annual_radiance as ar
@@ -60,11 +60,17 @@ def quick(office):
 
 
 def _direct_reference(office, matrix):
-    """lbl_illum's shadow-ray-per-hour direct sun (as lbl_illum/engine/annual.py builds it)."""
+    """lbl_illum's shadow ray per point and hour to the sun's centre (``sun_visibility``
+    without the disk), as ``rcontrib -ab 0 -dj 0`` traces each hour's sun source:
+    ``direct_sun_matrix`` averages the disk where a penumbra falls, which rtrace does not."""
     scene, points, normals = office
     integrator = Integrator(scene, scene.options)
-    return direct_sun_matrix(integrator.direct, integrator.tracer, points, normals, matrix.sun_direction,
-                             matrix.direct_normal_illuminance)
+    s, e_dn = matrix.sun_direction, matrix.direct_normal_illuminance
+    up = (s[:, 2] > 0.0) & (e_dn > 0.0)
+    out = np.zeros((len(points), len(s)), np.float32)
+    out[:, up] = sun_visibility(integrator.direct, integrator.tracer, points, normals, s[up]) * e_dn[up].astype(
+        np.float32)
+    return out
 
 
 # -- helpers, without Radiance ------------------------------------------------------------------
