@@ -239,7 +239,8 @@ def _radiance(ctx, root, points, normals, occupancy, year, hours) -> dict | None
     per_point = year.illuminance.sum(axis=1) / exact.sum(axis=1) - 1.0
     lit = out["direct_sun"] > 0.0
     return {"sda": theirs["sda"], "ase": theirs["ase"], "da": theirs["da"], "udi_useful": theirs["udi"]["useful"],
-            "seconds": out["seconds"], "settings": out.get("settings"), "commands": out.get("commands"),
+            "seconds": out["seconds"], "settings": out.get("settings"),
+            "commands": [c.replace(f"{root}/", "") for c in out.get("commands") or []],     # paths from the checkout
             "annual_sum_ratio": float(year.illuminance.sum() / exact.sum()),
             "classic_sum_ratio": float(year.illuminance.sum() / out["illuminance"].sum()),
             "per_point_sum_error": {"mean_abs": float(np.abs(per_point).mean()), "min": float(per_point.min()),
