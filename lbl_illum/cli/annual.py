@@ -128,7 +128,7 @@ def annual_command(args) -> int:
     from ..daylight.skymatrix import sky_matrix
     from ..daylight.weather import read_weather
     from ..engine.annual import annual_light
-    from ..io.files import atomic_write_bytes, atomic_write_text
+    from ..io.files import atomic_write_npy, atomic_write_text
     from ..io.points import read_points
     from ..scene.scenefile import load_scene
     from ..workplane import annual as metrics
@@ -220,11 +220,7 @@ def annual_command(args) -> int:
     if result.shades is not None:
         arrays.append(("illuminance_shades_operated.npy", result.shades.illuminance))
     for name, array in arrays:
-        import io
-
-        buffer = io.BytesIO()
-        np.save(buffer, np.ascontiguousarray(array, np.float32))
-        atomic_write_bytes(out / name, buffer.getvalue())
+        atomic_write_npy(out / name, array)
     metrics.write_point_table(out / "points.csv", points / scene.unit_scale, result)
     if Path(args.points).suffix.lower() == ".hbjson":       # Honeybee's annual layout, for Ladybug's tools
         from ..io.honeybee_results import write_annual_folder

@@ -10,13 +10,24 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "read_text_file"]
+__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_npy", "read_text_file"]
 
 
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def atomic_write_npy(path: str | os.PathLike, array, dtype="float32") -> None:
+    """``array`` as a NumPy ``.npy`` file of ``dtype``, written whole (:func:`atomic_write_bytes`)."""
+    import io
+
+    import numpy as np
+
+    buffer = io.BytesIO()
+    np.save(buffer, np.ascontiguousarray(array, dtype))
+    atomic_write_bytes(path, buffer.getvalue())
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:

@@ -17,13 +17,12 @@ Every file is written whole (a temporary name, then a rename).
 
 from __future__ import annotations
 
-import io
 import json
 from pathlib import Path
 
 import numpy as np
 
-from .files import atomic_write_bytes, atomic_write_text
+from .files import atomic_write_npy, atomic_write_text
 
 __all__ = ["write_res_folder", "write_annual_folder"]
 
@@ -50,12 +49,6 @@ def write_res_folder(folder: str | Path, grids, values) -> None:
     atomic_write_text(folder / "grids_info.json", _info(grids))
 
 
-def _npy(path: Path, array) -> None:
-    buffer = io.BytesIO()
-    np.save(buffer, np.ascontiguousarray(array, np.float32))
-    atomic_write_bytes(path, buffer.getvalue())
-
-
 def write_annual_folder(folder: str | Path, grids, illuminance, direct_sun, sun_up) -> None:
     """The annual layout of Honeybee's recipes (module text): ``illuminance`` and
     ``direct_sun`` (n, 8760) [lux], ``sun_up`` (8760,) bool, the rows written."""
@@ -65,7 +58,7 @@ def write_annual_folder(folder: str | Path, grids, illuminance, direct_sun, sun_
         target = folder / "__static_apertures__" / "default" / kind
         target.mkdir(parents=True, exist_ok=True)
         for grid, part in _split(grids, data):
-            _npy(target / f"{grid.identifier}.npy", part[:, rows])
+            atomic_write_npy(target / f"{grid.identifier}.npy", part[:, rows])
     atomic_write_text(folder / "grids_info.json", _info(grids))
     atomic_write_text(folder / "sun-up-hours.txt", "".join(f"{r + 0.5:g}\n" for r in rows))
     atomic_write_text(folder / "study_info.json", json.dumps(

@@ -268,7 +268,7 @@ def _rtrace_hours(ctx, root, scene, points, normals, matrix, hours) -> list[dict
     so that both skies have the same brightness and only the model of its shape is
     Radiance's) with the ground reflectance ``-g``, and ``rtrace`` at
     :data:`RTRACE_OPTIONS` on the exported office."""
-    from lbl_illum.io import export_radiance, radiance_programs
+    from lbl_illum.io import export_radiance, illuminance_from_rtrace, radiance_programs
 
     from . import annual_radiance
 
@@ -297,8 +297,7 @@ def _rtrace_hours(ctx, root, scene, points, normals, matrix, hours) -> list[dict
             def rtrace(options, lines):
                 run = subprocess.run([binary["rtrace"], "-h", "-I", "-n", "2", *options, "hour.oct"], cwd=folder,
                                      env=env, input=lines, capture_output=True, text=True, check=True)
-                rgb = np.array([[float(v) for v in line.split()[:3]] for line in run.stdout.strip().splitlines()])
-                return 179.0 * rgb @ np.array([0.265, 0.670, 0.065])
+                return illuminance_from_rtrace(run.stdout)
 
             total = rtrace(RTRACE_OPTIONS, text)
             centre = rtrace(["-ab", "0"], text)
@@ -350,16 +349,7 @@ def checks(res: dict) -> list[dict]:
 
 
 def _write(rep: Report, res: dict, year) -> None:
-    doc = __doc__.split("\n\n", 1)[1].split("Criteria")[0]
-    paragraphs = doc.strip().split("\n\n")
-    rep.text(paragraphs[0])
-    items = []
-    for line in "\n".join(paragraphs[1:]).splitlines():
-        if line.startswith("* "):
-            items.append(line[2:].strip())
-        elif items:
-            items[-1] += " " + line.strip()
-    rep.bullets(items)
+    rep.intro(__doc__)
     s = res["settings"]
     rep.text(f"Settings: accuracy {s['accuracy']:g}, samples {s['samples']}, bounces {s['bounces']}, point samples "
              f"{s['point_samples']}, interpolation {s['interpolation']}; {s['points']} sensors; "

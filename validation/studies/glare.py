@@ -363,16 +363,7 @@ def checks(res: dict) -> list[dict]:
 
 
 def _write(rep: Report, res: dict, figure) -> None:
-    doc = __doc__.split("\n\n", 1)[1].split("Criteria")[0]
-    paragraphs = doc.strip().split("\n\n")
-    rep.text(paragraphs[0])
-    items = []
-    for line in "\n".join(paragraphs[1:]).splitlines():
-        if line.startswith("* "):
-            items.append(line[2:].strip())
-        elif items:
-            items[-1] += " " + line.strip()
-    rep.bullets(items)
+    rep.intro(__doc__)
     program = res["evalglare"]
     settings = res["settings"]
     rep.text(f"Images of {settings['side']} × {settings['side']} pixels rendered with the `{settings['preset']}` preset; "

@@ -127,6 +127,20 @@ class Report:
         for para in re.split(r"\n\s*\n", text.strip()):
             self.blocks.append(("para", " ".join(line.strip() for line in para.splitlines())))
 
+    def intro(self, docstring: str) -> None:
+        """The opening of a study from its module docstring: the paragraph after the title
+        line as text, then its ``* `` items (up to the "Criteria" paragraph) as bullets."""
+        doc = docstring.split("\n\n", 1)[1].split("Criteria")[0]
+        paragraphs = doc.strip().split("\n\n")
+        self.text(paragraphs[0])
+        items = []
+        for line in "\n".join(paragraphs[1:]).splitlines():
+            if line.startswith("* "):
+                items.append(line[2:].strip())
+            elif items:
+                items[-1] += " " + line.strip()
+        self.bullets(items)
+
     def bullets(self, items) -> None:
         self.blocks.append(("bullets", [str(i) for i in items]))
 
