@@ -90,18 +90,27 @@ UNIFORM_SKY = {"type": "uniform", "horizontal_illuminance": 10000.0, "ground_ref
 DOWN = (np.array([[0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, -1.0]]))
 
 
-def plastic_floor_reference(C, s, alpha, E_h=10000.0):
+def plastic_floor_reference(C, s, alpha, E_h=10000.0, metal=False):
+    """Illuminance [lux] at a sensor facing down over an infinite floor of plastic (or, with
+    ``metal``, Radiance's metal) of colour C under a uniform sky of horizontal
+    illuminance E_h: E_h ∫ (ρ_d(μ) + ρ_s(μ)) 2μ dμ by 16-point Gauss–Legendre quadrature
+    in μ = cos θ.  A metal's specular part is coloured: F + s C (1 − F) polished, s C
+    times the lobe's albedo rough; with an RGB C the photometric value is returned."""
+    from lbl_illum.photometry import luminance
     from lbl_illum.scene.materials import plastic_fresnel
 
+    C = np.atleast_1d(np.asarray(C, np.float64))[:, None]        # (channels, 1)
     x, w = np.polynomial.legendre.leggauss(16)
     mu, w = 0.5 * (x + 1.0), 0.5 * w
     if alpha ** 2 <= 1e-6:
-        rho_s = s + plastic_fresnel(mu) * (1.0 - s) if s >= 0.018 else np.full_like(mu, s)
-        rho_d, spec = (1.0 - rho_s) * C, rho_s
+        F = plastic_fresnel(mu) if s >= 0.018 else np.zeros_like(mu)
+        rho_s = s + F * (1.0 - s)
+        rho_d, spec = (1.0 - rho_s) * C, (F + s * C * (1.0 - F) if metal else rho_s + 0.0 * C)
     else:
-        rho_d = np.full_like(mu, (1.0 - s) * C)
-        spec = s * np.array([lobe_albedo(np.arccos(m), alpha, 200, 128) for m in mu])
-    return E_h * float(np.sum(w * (rho_d + spec) * 2.0 * mu))
+        rho_d = np.full((len(C), len(mu)), (1.0 - s)) * C
+        spec = s * np.array([lobe_albedo(np.arccos(m), alpha, 200, 128) for m in mu]) * (C if metal else 1.0)
+    E = E_h * np.sum(w * (rho_d + spec) * 2.0 * mu, axis=1)
+    return float(E[0]) if len(E) == 1 else float(luminance(E))
 
 
 # -- shared with several test modules (from test_grid.py)

@@ -184,7 +184,7 @@ CATALOGUE = [
     ("unknown sun key", add("[sun]\naltitude = 40\nazimut = 180\n"), GOOD_POINTS, {}, [],
      r"\[sun\]: unknown key 'azimut' \(did you mean 'azimuth'\?\)$"),
     ("unknown material type", edit('type = "diffuse"', 'type = "difuse"'), GOOD_POINTS, {}, [],
-     r"\[materials.floor\]: 'type' must be one of diffuse, glass, mirror, plastic, light, opening, translucent, got 'difuse' "
+     r"\[materials.floor\]: 'type' must be one of diffuse, glass, mirror, plastic, metal, light, opening, translucent, got 'difuse' "
      r"\(did you mean 'diffuse'\?\)$"),
     ("unknown shape", edit('shape = "rectangle"', 'shape = "rectangel"'), GOOD_POINTS, {}, [],
      r"geometry\[0\]: unknown shape 'rectangel' \(did you mean 'rectangle'\?\)$"),
@@ -256,7 +256,7 @@ CATALOGUE = [
     ("material used but not defined", edit('material = "floor"', 'material = "flor"'), GOOD_POINTS, {}, [],
      r"geometry\[0\]: unknown material 'flor' \(did you mean 'floor'\?\)$"),
     ("material missing its type", edit('type = "diffuse"\n', ""), GOOD_POINTS, {}, [],
-     r"\[materials.floor\]: missing key 'type' \(one of diffuse, glass, mirror, plastic, light, opening, translucent\)$"),
+     r"\[materials.floor\]: missing key 'type' \(one of diffuse, glass, mirror, plastic, metal, light, opening, translucent\)$"),
     # .pts files
     ("points: malformed line", GOOD, "0.5 0.5 0.1 0 0 1\n0.5 x 0.1 0 0 1\n", {}, [],
      r"p.pts: line 2: not a number: 'x'$"),

@@ -47,7 +47,7 @@ def scene_fingerprint(scene: Scene, options: Options, portals=None) -> str:
                 h.update(np.ascontiguousarray(arr, np.float64).tobytes())
     desc = {
         "materials": [(m.kind, m.reflectance, m.transmittance, m.luminance, m.model, m.panes, m.index)
-                      + ((m.specularity, m.roughness) if m.kind == "plastic" else ())
+                      + ((m.specularity, m.roughness) if m.kind in ("plastic", "metal") else ())
                       for m in scene.materials],
         "sky": scene.sky.parameters,
         "sun": None if scene.sun is None else (scene.sun.altitude, scene.sun.azimuth,

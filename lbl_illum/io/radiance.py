@@ -252,7 +252,7 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
       coefficients: both only approximate the glass of another model;
     * ``mirror`` → ``mirror`` with the reflectance RGB;
     * ``plastic`` → ``plastic`` with the colour RGB, the specularity and the roughness
-      (the same model: :mod:`lbl_illum.scene.materials`);
+      (the same model: :mod:`lbl_illum.scene.materials`); ``metal`` → ``metal`` likewise;
     * ``light`` → ``light`` with radiance = luminance / 179 per channel;
     * ``translucent`` (ρ, τ) → ``trans`` with colour C = ρ + τ, no specular part and
       transmitted share τ/(ρ + τ) (Radiance's trans reflects C (1 − t_d) and transmits
@@ -261,8 +261,8 @@ def material_primitive(rad_name: str, material: Material, glass: str = "auto") -
     """
     if material.kind == "diffuse":
         return f"void plastic {rad_name}\n0\n0\n5 {_rgb(material.reflectance)} 0 0\n"
-    if material.kind == "plastic":
-        return (f"void plastic {rad_name}\n0\n0\n5 {_rgb(material.reflectance)} {_g(material.specularity)} "
+    if material.kind in ("plastic", "metal"):
+        return (f"void {material.kind} {rad_name}\n0\n0\n5 {_rgb(material.reflectance)} {_g(material.specularity)} "
                 f"{_g(material.roughness)}\n")
     if material.kind == "mirror":
         return f"void mirror {rad_name}\n0\n0\n3 {_rgb(material.reflectance)}\n"

@@ -13,6 +13,8 @@ mirror     specular reflector                                           ``reflec
 plastic    Radiance's ``plastic``: a white specular part (Ward's          ``reflectance`` C (0…1),
            isotropic lobe, or a mirror when polished) over a Lambertian  ``specularity`` s (0…1),
            part of colour C                                             ``roughness`` α (0…1)
+metal      Radiance's ``metal``: plastic whose specular part is          as plastic
+           coloured by C
 translucent  Lambertian reflector and diffuse transmitter: radiance       ``reflectance`` ρ (0…1),
            L = ρ E_this side / π + τ E_other side / π (both faces)      ``transmittance`` τ (0…1),
                                                                         ρ + τ ≤ 1,
@@ -77,6 +79,13 @@ Glass is a portal by default where the sky lies behind it (``portal = "auto"``,
 
 Sampling the lobe (:func:`ward_sample`): see its docstring for the derivation of the
 weight 2 ρ_s cos θ_o / (cos θ_v + cos θ_o).
+
+**Metal.**  Radiance's ``metal`` (normal.c, the same routine as plastic): the same
+arguments and the same lobe, diffuse reflectance (1 − ρ_s) C, but the specular
+reflectance coloured by the base colour, s C per channel; polished metal with
+s ≥ 0.018 reflects F + s C (1 − F) per channel, F the Fresnel estimate above, so that it
+turns white toward grazing as Radiance's does (:meth:`MaterialTable.specular_rgb`).  In
+the engine a metal is a plastic with a specular colour (:attr:`MaterialTable.metallic`).
 """
 
 from __future__ import annotations
@@ -99,13 +108,16 @@ __all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "
            "PLASTIC_BRANCH_LIMIT"]
 
 DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC, OPENING, TRANSLUCENT = 0, 1, 2, 3, 4, 5, 6
+#: Engine code of each material type: a metal is shaded as plastic with a coloured
+#: specular part (:attr:`MaterialTable.metallic`).
 KIND_CODES = {"diffuse": DIFFUSE, "glass": GLASS, "mirror": MIRROR, "light": LIGHT, "plastic": PLASTIC,
-              "opening": OPENING, "translucent": TRANSLUCENT}
+              "metal": PLASTIC, "opening": OPENING, "translucent": TRANSLUCENT}
 _KEYS = {
     "diffuse": ("type", "reflectance"),
     "glass": ("type", "transmittance", "reflectance", "portal", "model", "panes", "refractive_index"),
     "mirror": ("type", "reflectance"),
     "plastic": ("type", "reflectance", "specularity", "roughness"),
+    "metal": ("type", "reflectance", "specularity", "roughness"),
     "light": ("type", "luminance"),
     "opening": ("type",),
     "translucent": ("type", "reflectance", "transmittance", "portal"),
@@ -150,16 +162,16 @@ class Material:
     """
 
     name: str
-    kind: str                                   # "diffuse" | "glass" | "mirror" | "plastic" | "light" | "opening" | "translucent"
-    reflectance: tuple = (0.0, 0.0, 0.0)        # ρ (diffuse, mirror, glass surface reflection), C (plastic)
+    kind: str                                   # "diffuse" | "glass" | "mirror" | "plastic" | "metal" | "light" | "opening" | "translucent"
+    reflectance: tuple = (0.0, 0.0, 0.0)        # ρ (diffuse, mirror, glass surface reflection), C (plastic, metal)
     transmittance: tuple = (0.0, 0.0, 0.0)      # τ_n (glass, normal incidence); τ_d (translucent)
     luminance: tuple = (0.0, 0.0, 0.0)          # emitted luminance [cd/m²] (light)
     portal: bool | str = False                  # glass sampled by area in the indirect step: True, False, "auto"
     model: str = "fresnel"                      # glass: "fresnel" | "constant"
     panes: int = 1                              # glass (fresnel): 1 or 2 panes
     index: float = GLASS_INDEX                  # glass (fresnel): refractive index n
-    specularity: float = 0.0                    # plastic: specular fraction s
-    roughness: float = 0.0                      # plastic: RMS facet slope α (0: polished)
+    specularity: float = 0.0                    # plastic, metal: specular fraction s
+    roughness: float = 0.0                      # plastic, metal: RMS facet slope α (0: polished)
 
     @property
     def code(self) -> int:
@@ -453,7 +465,7 @@ def material_from_table(name: str, table: Mapping[str, Any], where: str) -> Mate
         if any(r + t > 1.0 + 1e-12 for r, t in zip(rho, tau)):
             raise InputError(f"{where}: reflectance + transmittance must not exceed 1")
         return Material(name, kind, reflectance=rho, transmittance=tau, portal=_portal(table, where))
-    if kind == "plastic":
+    if kind in ("plastic", "metal"):
         return Material(name, kind, reflectance=get_rgb(table, "reflectance", where, maximum=1.0),
                         specularity=get_number(table, "specularity", where, minimum=0.0, maximum=1.0),
                         roughness=get_number(table, "roughness", where, minimum=0.0, maximum=1.0))
@@ -526,6 +538,7 @@ class MaterialTable:
     transmissivity: np.ndarray = None   # (m, 3) float64, t_n of each pane of Fresnel glass
     specularity: np.ndarray = None      # (m,) float64, specular fraction s of plastic (0 otherwise)
     roughness: np.ndarray = None        # (m,) float64, roughness α of plastic (0 otherwise)
+    metallic: np.ndarray = None         # (m,) bool, plastic whose specular part has its colour C (metal)
 
     def __post_init__(self):
         m = len(self.kind)
@@ -533,6 +546,8 @@ class MaterialTable:
             self.specularity = np.zeros(m)
         if self.roughness is None:
             self.roughness = np.zeros(m)
+        if self.metallic is None:
+            self.metallic = np.zeros(m, bool)
         plastic = self.kind == PLASTIC
         #: (m, 3) Lambertian reflectance: ρ of diffuse materials, (1 − s) C of plastic
         #: (a polished plastic's at angle θ is :meth:`diffuse_at`), 0 for other kinds
@@ -579,6 +594,7 @@ class MaterialTable:
             transmissivity=tn,
             specularity=np.array([m.specularity for m in materials], dtype=np.float64),
             roughness=np.array([m.roughness for m in materials], dtype=np.float64),
+            metallic=np.array([m.kind == "metal" for m in materials], dtype=bool),
         )
 
     @property
@@ -591,8 +607,9 @@ class MaterialTable:
         incidence cosines ``cos_i`` (k,): ``(tau, rho)``, each (k, 3).
 
         Fresnel glass by :func:`glazing_optics`; constant glass its constants; mirrors
-        (0, ρ); plastic (0, ρ_s(θ)) in every channel (:meth:`plastic_specular`); other
-        kinds (0, their reflectance), which callers do not use.
+        (0, ρ); plastic (0, ρ_s(θ)) in every channel (:meth:`plastic_specular`), metal
+        (0, its coloured ρ_s(θ); :meth:`specular_rgb`); other kinds (0, their
+        reflectance), which callers do not use.
         """
         mat = np.asarray(mat, np.int64)
         tau = self.transmittance[mat].copy()
@@ -600,7 +617,7 @@ class MaterialTable:
         tau[self.kind[mat] != GLASS] = 0.0
         plastic = np.flatnonzero(self.kind[mat] == PLASTIC)
         if len(plastic):
-            rho[plastic] = self.plastic_specular(mat[plastic], np.asarray(cos_i, np.float64)[plastic])[:, None]
+            rho[plastic] = self.specular_rgb(mat[plastic], np.asarray(cos_i, np.float64)[plastic])
         sel = np.flatnonzero(self.fresnel[mat])
         if len(sel):
             cos_i = np.asarray(cos_i, np.float64)
@@ -624,6 +641,27 @@ class MaterialTable:
         if len(sel):
             s[sel] += plastic_fresnel(np.asarray(cos_i, np.float64)[sel]) * (1.0 - s[sel])
         return s
+
+    def specular_rgb(self, mat, cos_i):
+        """(k, 3) specular reflectance of plastic and metal materials ``mat`` hit at
+        incidence cosines ``cos_i``: ρ_s(θ) of :meth:`plastic_specular` in every channel
+        for plastic; for metal (Radiance's normal.c) s C, or F + s C (1 − F) when polished
+        with s ≥ 0.018, F = :func:`plastic_fresnel`."""
+        mat = np.asarray(mat, np.int64)
+        rho = np.repeat(self.plastic_specular(mat, cos_i)[:, None], 3, axis=1)
+        metal = np.flatnonzero(self.metallic[mat])
+        if len(metal):
+            m = mat[metal]
+            s = self.specularity[m]
+            fest = np.where(self.plastic_fresnel[m], plastic_fresnel(np.asarray(cos_i, np.float64)[metal]), 0.0)
+            rho[metal] = fest[:, None] + self.reflectance[m] * (s * (1.0 - fest))[:, None]
+        return rho
+
+    def specular_colour(self, mat):
+        """(k, 3) colour of the specular lobe of materials ``mat``: 1 for plastic, the
+        base colour C for metal (rough metal: its ρ_s f_s is s C f_s)."""
+        mat = np.asarray(mat, np.int64)
+        return np.where(self.metallic[mat][:, None], self.reflectance[mat], 1.0)
 
     def diffuse_at(self, mat, cos_i):
         """(k, 3) Lambertian reflectance of materials ``mat`` hit at incidence cosines

@@ -534,9 +534,8 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
     """Tables in the form of the scene file's ``[materials.NAME]`` for the modifiers
     ``names``, from ``definitions`` (name → (primitive, where it was read)).
 
-    ``plastic`` (C, s, α): diffuse C when s = 0, else our plastic; ``metal``: our plastic
-    with the same arguments (its specular part white instead of coloured by C: the
-    difference is counted in a warning); ``glass`` (t_n per channel, n): Fresnel glass of
+    ``plastic`` (C, s, α): diffuse C when s = 0, else our plastic; ``metal``: our metal
+    with the same arguments (specular part coloured by C); ``glass`` (t_n per channel, n): Fresnel glass of
     the same normal transmittance; ``mirror``: mirror; ``trans`` (C, s, α, t_d, t_s):
     translucent, diffuse reflectance (1 − s)(1 − t_d) C and diffuse transmittance
     (1 − s) t_d C (a specular part of either is warned: its reflection is dropped, its
@@ -579,10 +578,8 @@ def material_tables(definitions: dict[str, tuple[RadPrimitive, str]], names, war
         rgb = [float(v) for v in a[:3]]
         if prim.kind in ("plastic", "metal"):
             s, alpha = float(a[3]), float(a[4])
-            if prim.kind == "metal":
-                notes["metal read as plastic (white specular)"] = notes.get("metal read as plastic (white specular)", 0) + 1
-            out[name] = ({"type": "diffuse", "reflectance": rgb} if s == 0.0 and prim.kind == "plastic" else
-                         {"type": "plastic", "reflectance": rgb, "specularity": s, "roughness": alpha})
+            out[name] = ({"type": "diffuse", "reflectance": rgb} if s == 0.0 else
+                         {"type": prim.kind, "reflectance": rgb, "specularity": s, "roughness": alpha})
         elif prim.kind == "glass":
             index = float(a[3]) if len(a) == 4 else 1.52
             tau, _ = glazing_optics(np.ones(1), np.clip(np.array(rgb), 0.0, 1.0), index)

@@ -289,8 +289,8 @@ def test_integrating_sphere_walls_match_the_closed_form(rho):
 
 # -- plastic ------------------------------------------------------------------------------
 
-def plastic_scene(s, alpha, C=(0.2, 0.5, 0.8), sky=None, with_sun=False):
-    mats = {"plane": {"type": "plastic", "reflectance": list(C), "specularity": s, "roughness": alpha}}
+def plastic_scene(s, alpha, C=(0.2, 0.5, 0.8), sky=None, with_sun=False, kind="plastic"):
+    mats = {"plane": {"type": kind, "reflectance": list(C), "specularity": s, "roughness": alpha}}
     return make_scene([PLANE], mats, sky or uniform_sky(), sun() if with_sun else None)
 
 
@@ -363,6 +363,37 @@ def test_rough_plastic_sun_highlight_is_counted_once():
     radiance, _, _ = trace_view_paths(polished, np.array([[0.0, 0.0, 1.5]]), d[None, :], rng)
     rho_s = s + float(plastic_fresnel(sd[2])) * (1 - s)
     np.testing.assert_allclose(radiance[0], rho_s * E_DN / SUN_SOLID_ANGLE, rtol=1e-6)
+
+
+@pytest.mark.parametrize("deg", [20.0, 85.0])
+def test_polished_metal_reflects_the_sky_in_its_colour(deg):
+    """Radiance's metal (normal.c): specular reflectance F + s C (1 − F) per channel,
+    F = FRESNE(cos θ), so the reflection is coloured at normal incidence and turns white
+    toward grazing; the diffuse hit keeps (1 − ρ_s(θ)) C with the plastic's scalar ρ_s."""
+    s, C = 0.8, np.array([0.9, 0.6, 0.2])
+    integ = Integrator(plastic_scene(s, 0.0, C, kind="metal"), QUICK)
+    o, d = rays_at(deg, 4)
+    radiance, hits, _ = trace_view_paths(integ, o, d, np.random.default_rng(0))
+    F = math.exp(-5.85 * math.cos(math.radians(deg))) - 0.00202943064
+    np.testing.assert_allclose(radiance, np.tile((F + s * C * (1 - F)) * E_H / np.pi, (4, 1)), rtol=1e-6)
+    rho_s = s + F * (1 - s)
+    np.testing.assert_allclose(hits["weight"], np.tile((1 - rho_s) * C / np.pi, (4, 1)), rtol=1e-12)
+
+
+def test_rough_metal_sun_highlight_has_its_colour():
+    """The sun's highlight on rough metal is the plastic's times C per channel: the same
+    rays and random numbers give s C f_s cos θ_s E_dn (Radiance's metal) where plastic
+    gives the white s f_s cos θ_s E_dn."""
+    s, alpha, C = 0.6, 0.1, np.array([0.9, 0.6, 0.2])
+    sd = sun_direction()
+    d = np.tile(sd * [1, 1, -1], (64, 1))
+    o = np.tile([0.0, 0.0, 1.5], (64, 1))
+    out = {}
+    for kind in ("plastic", "metal"):
+        integ = Integrator(plastic_scene(s, alpha, C, sky={"type": "none"}, with_sun=True, kind=kind), QUICK)
+        out[kind] = trace_view_paths(integ, o, d, np.random.default_rng(3))[0]
+    assert out["plastic"][:, 0].min() > 0.5 * E_DN
+    np.testing.assert_allclose(out["metal"], out["plastic"] * C, rtol=1e-12)
 
 
 def test_polished_plastic_image_under_a_uniform_sky():

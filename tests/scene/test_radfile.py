@@ -341,6 +341,11 @@ roughness = 0.1
 [materials.mirror]
 type = "mirror"
 reflectance = 0.9
+[materials.brass]
+type = "metal"
+reflectance = [0.9, 0.6, 0.2]
+specularity = 0.8
+roughness = 0.05
 [materials.pane]
 type = "glass"
 transmittance = 0.7
@@ -370,7 +375,7 @@ def test_every_exported_material_reads_back(tmp_path):
     from lbl_illum.io.radiance import export_radiance
     from lbl_illum.scene.materials import MaterialTable
 
-    names = ["paint", "shiny", "mirror", "pane", "double", "flat", "sheet", "tinted", "lamp"]
+    names = ["paint", "shiny", "mirror", "brass", "pane", "double", "flat", "sheet", "tinted", "lamp"]
     obj = [f"v {k} 0 0\nv {k + 1} 0 0\nv {k} 1 0\ng {n}\nf {3 * k + 1} {3 * k + 2} {3 * k + 3}"
            for k, n in enumerate(names)]
     _write(tmp_path, "room.obj", "\n".join(obj) + "\n")
@@ -386,7 +391,7 @@ def test_every_exported_material_reads_back(tmp_path):
     for name in names:
         ta, tb = MaterialTable.from_materials([a[name]]), MaterialTable.from_materials([b[name]])
         for field in ("kind", "reflectance", "transmittance", "luminance", "diffuse_reflectance",
-                      "diffuse_transmittance"):
+                      "diffuse_transmittance", "specularity", "roughness", "metallic"):
             np.testing.assert_allclose(getattr(tb, field), getattr(ta, field), rtol=1e-6, atol=1e-9,
                                        err_msg=f"{name}.{field}")
         assert b[name].model == a[name].model and b[name].panes == a[name].panes, name
