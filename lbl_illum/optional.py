@@ -25,6 +25,7 @@ EXTRAS = {
     "pyradiance": ("'lbl_illum[radiance]'", "Radiance's programs"),
     "OpenImageIO": ("OpenImageIO", "image files"),
     "honeybee_radiance": ("'lbl_illum[honeybee]'", "Honeybee models (.hbjson)"),
+    "distributed": ("'lbl_illum[distributed]'", "studies on a Dask cluster"),
 }
 
 

@@ -16,6 +16,9 @@ ALLOWED = {
     "daylight": {"scene.geometry"},
     "engine": {"scene", "daylight"},
     "glare": {"scene.views", "io.images", "daylight.skymatrix", "daylight.sun"},
+    # runs on a cluster: the engine's integrator and records, a worker's scene read from its
+    # file, and the cache files' contents as the record sets that travel
+    "distributed": {"engine", "scene.scenefile", "io.cachefile"},
 }
 #: Single modules allowed more: the record store's save/load conveniences, which import the
 #: file format when called (the engine itself never reads or writes a cache file).

@@ -18,7 +18,8 @@ from pathlib import Path
 from .._version import __version__
 from ..errors import InputError
 from ..optional import check as check_optional
-from .shared import check_output_file, finite as _finite, run_options, whole as _whole
+from .shared import (add_cluster_arguments, check_cluster_arguments, check_output_file, cluster_compute, cluster_note,
+                     finite as _finite, open_study_cluster, run_options, whole as _whole)
 from .progress import ProgressBar, compile_notice
 from ..options import DEFAULT_PRESET, INTERPOLATIONS, PRESETS, Options, preset_table
 from ..scene.scenefile import MAX_BOUNCES
@@ -144,6 +145,7 @@ def _build_parser() -> argparse.ArgumentParser:
                    help=".csv (x,y,z,nx,ny,nz,illuminance,direct,indirect) or .txt (one value per line)")
     _add_quality_options(p)
     _add_file_options(p)
+    add_cluster_arguments(p)
     _add_report_options(p, "300 500", "lux")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
 
@@ -163,6 +165,7 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="reflectance of the ground below the horizon (default: the scene's [sky] value, else 0.2)")
     _add_quality_options(d)
     _add_file_options(d)
+    add_cluster_arguments(d)
     _add_report_options(d, "2", "%")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
 
@@ -330,6 +333,7 @@ def _check_run_files(args) -> None:
         check_view_path(args.view3d)
     if args.thresholds is not None and not args.thresholds:
         raise InputError("--thresholds: give at least one value")
+    check_cluster_arguments(args)
 
 
 def _grid_folder(args) -> bool:
@@ -353,9 +357,11 @@ def _write_values(args, scene, points, normals, result, values, areas, **extra) 
                   luminance(result.direct), luminance(result.indirect), areas=areas, **extra)
 
 
-def _compute(scene, args, points, normals):
+def _compute(scene, args, points, normals, cluster=None, recipe=None):
     """Run the integrator with the options, cache file and progress bar of ``args``:
-    (result, integrator, options)."""
+    (result, integrator, options, costs).  With a ``cluster`` (:func:`open_study_cluster`)
+    the run goes by rounds of chunks on it (``recipe``: how its workers make the scene;
+    ``costs`` the rounds' costs, else None)."""
     from ..engine.integrator import Integrator
 
     options = run_options(scene, args)
@@ -368,7 +374,12 @@ def _compute(scene, args, points, normals):
             print(f"lbl-illum: note: {note}", file=sys.stderr)
     bar = _ProgressBar(enabled=not args.quiet)
     integ.progress = bar
+    costs = None
     try:
+        if cluster is not None:
+            with compile_notice(enabled=not args.quiet, bar=bar):
+                result, costs = cluster_compute(cluster, integ, recipe, points, normals, args, bar)
+            return result, integ, options, costs
         if args.cache:
             from ..io.cachefile import attach_cache_file
             attach_cache_file(integ, args.cache, rebuild=args.rebuild_cache)
@@ -376,10 +387,10 @@ def _compute(scene, args, points, normals):
             result = integ.compute(points, normals)       # writes the cache file too
     finally:
         bar.close()
-    return result, integ, options
+    return result, integ, options, costs
 
 
-def _write_stats(args, scene, result, options, seconds, values: dict) -> None:
+def _write_stats(args, scene, result, options, seconds, values: dict, costs=None) -> None:
     """``--stats``: what the run did and its effective settings, as JSON."""
     from ..io.files import atomic_write_text
 
@@ -400,6 +411,8 @@ def _write_stats(args, scene, result, options, seconds, values: dict) -> None:
                      "max_spacing": stats.max_spacing / scene.unit_scale,
                      "units": scene.units},
     }
+    if costs is not None:
+        doc["cluster"] = {"chunk_size": args.chunk_size, "round_chunks": args.round_chunks, **costs.as_dict()}
     atomic_write_text(args.stats, json.dumps(doc, indent=2) + "\n")
 
 
@@ -457,9 +470,15 @@ def _run_illuminance(args) -> int:
     from ..io.points import read_points
 
     _check_run_files(args)
-    scene = load_scene(args.scene)
-    points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
-    result, integ, options = _compute(scene, args, points, normals)
+    cluster = open_study_cluster(args)
+    try:
+        scene = load_scene(args.scene)
+        points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
+        recipe = _recipe(args.scene) if cluster is not None else None
+        result, integ, options, costs = _compute(scene, args, points, normals, cluster, recipe)
+    finally:
+        if cluster is not None:
+            cluster.close()
     stats = result.stats
     E = result.illuminance
     _write_values(args, scene, points, normals, result, E, areas)
@@ -467,13 +486,22 @@ def _run_illuminance(args) -> int:
     doc = _report(args, scene, points, E, areas, "Illuminance", "lux", thresholds, {})
     seconds = time.perf_counter() - t0
     if args.stats:
-        _write_stats(args, scene, result, options, seconds, {"illuminance": E})
+        _write_stats(args, scene, result, options, seconds, {"illuminance": E}, costs)
     if not args.quiet:
         print(f"lbl-illum: illuminance at {len(points)} points (mean {readable(E.mean())} lux, min {readable(E.min())}, "
-              f"max {readable(E.max())}) in {seconds:.2f} s; records per level {stats.records} "
+              f"max {readable(E.max())}) in {seconds:.2f} s{cluster_note(cluster, costs)}; records per level {stats.records} "
               f"({stats.primary_evaluations} new); {stats.rays:,} rays; {summary_line(doc, extremes=False)} "
               f"-> {args.output}", file=sys.stderr)
     return 0
+
+
+def _recipe(scene_file, sky=None, sun=None, replace_sky: bool | None = None):
+    """How a worker makes the run's scene: the scene file (absolute path) and the sky and sun
+    that replace its own, if ``sky`` is given (:class:`lbl_illum.distributed.worker.SceneRecipe`)."""
+    from ..distributed.worker import SceneRecipe
+
+    replace = sky is not None if replace_sky is None else replace_sky
+    return SceneRecipe(str(Path(scene_file).resolve()), sky, sun, replace)
 
 
 def _overcast_scene(scene, sky_illuminance: float, ground_reflectance: float | None):
@@ -501,10 +529,16 @@ def _run_daylight_factor(args) -> int:
     from ..io.points import read_points
 
     _check_run_files(args)
-    scene = _overcast_scene(load_scene(args.scene), args.sky_illuminance, args.ground_reflectance)
-    E_h = unobstructed_horizontal_illuminance(lambda d: luminance(scene.sky.luminance(d)))
-    points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
-    result, integ, options = _compute(scene, args, points, normals)
+    cluster = open_study_cluster(args)
+    try:
+        scene = _overcast_scene(load_scene(args.scene), args.sky_illuminance, args.ground_reflectance)
+        E_h = unobstructed_horizontal_illuminance(lambda d: luminance(scene.sky.luminance(d)))
+        points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
+        recipe = _recipe(args.scene, scene.sky, None) if cluster is not None else None
+        result, integ, options, costs = _compute(scene, args, points, normals, cluster, recipe)
+    finally:
+        if cluster is not None:
+            cluster.close()
     stats = result.stats
     E = result.illuminance
     DF = daylight_factor(E, E_h)
@@ -516,10 +550,10 @@ def _run_daylight_factor(args) -> int:
     doc = _report(args, scene, points, DF, areas, "Daylight factor", "%", thresholds, sky)
     seconds = time.perf_counter() - t0
     if args.stats:
-        _write_stats(args, scene, result, options, seconds, {"daylight_factor": DF, "illuminance": E})
+        _write_stats(args, scene, result, options, seconds, {"daylight_factor": DF, "illuminance": E}, costs)
     if not args.quiet:
         print(f"lbl-illum: daylight factor at {len(points)} points (mean {readable(DF.mean())}%, min {readable(DF.min())}, "
-              f"max {readable(DF.max())}) in {seconds:.2f} s under a CIE overcast sky (E_h {readable(E_h)} lux); records per "
+              f"max {readable(DF.max())}) in {seconds:.2f} s{cluster_note(cluster, costs)} under a CIE overcast sky (E_h {readable(E_h)} lux); records per "
               f"level {stats.records} ({stats.primary_evaluations} new); {stats.rays:,} rays; "
               f"{summary_line(doc, extremes=False)} -> {args.output}", file=sys.stderr)
     return 0

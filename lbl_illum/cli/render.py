@@ -23,7 +23,8 @@ from ..scene.scenefile import Scene
 from ..scene.views import View, view_from_file, view_from_string, views_from_table
 from .progress import ProgressBar as _Bar, compile_notice
 from ..workplane.metrics import readable
-from .shared import check_output_file, run_options
+from .shared import (add_cluster_arguments, check_cluster_arguments, check_output_file, cluster_compute, cluster_note,
+                     open_study_cluster, run_options)
 from ..viz.falsecolor import SCALES, STYLES
 
 __all__ = ["add_render_arguments", "render_command", "resolve_view", "scene_views", "check_image_size",
@@ -126,6 +127,7 @@ def add_render_arguments(parser) -> None:
     from .cache import add_cache_file_arguments
 
     add_cache_file_arguments(o)
+    add_cluster_arguments(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
 
 
@@ -220,6 +222,7 @@ def _check_outputs(args) -> None:
     top = _arg(args, "falsecolor_max")
     if top is not None and not (math.isfinite(top) and top > 0):
         raise InputError(f"--falsecolor-max must be a positive luminance [cd/m2], got {top:g}")
+    check_cluster_arguments(args)
 
 
 def render_command(args, progress=None) -> int:
@@ -231,15 +234,25 @@ def render_command(args, progress=None) -> int:
     Bad input raises :class:`~lbl_illum.errors.InputError` before any file is written.
     ``progress`` replaces the tqdm bar (tests).
     """
-    # the engine is imported here, not with the module: the parser (--help) needs none of it
+    t0 = time.perf_counter()
+    _check_outputs(args)
+    quiet = bool(_arg(args, "quiet", False))
+    cluster = open_study_cluster(args)
+    try:
+        return _render(args, cluster, progress, quiet, t0)
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def _render(args, cluster, progress, quiet, t0) -> int:
+    """:func:`render_command` once the outputs are checked and the cluster (or None) is open.
+    The engine is imported here, not with the module: the parser (--help) needs none of it."""
     from ..engine.integrator import Integrator
     from ..engine.render import render_image
-    t0 = time.perf_counter()
     from ..io.images import write_image, write_preview
     from ..scene.scenefile import load_scene
 
-    _check_outputs(args)
-    quiet = bool(_arg(args, "quiet", False))
     scene = load_scene(args.scene)
     view = resolve_view(scene, _arg(args, "view"), _arg(args, "view_file"))
     glare = bool(_arg(args, "glare") or _arg(args, "glare_json"))
@@ -257,9 +270,19 @@ def render_command(args, progress=None) -> int:
             print(f"lbl-illum: note: {note}", file=sys.stderr)
     bar = progress if progress is not None else _Bar(enabled=not quiet)
     integ.progress = bar
+    shade, costs = None, []
+    if cluster is not None:
+        from ..distributed.worker import SceneRecipe
+
+        recipe = SceneRecipe(str(Path(args.scene).resolve()))
+
+        def shade(points, normals, spacing, taper):
+            result, cost = cluster_compute(cluster, integ, recipe, points, normals, args, bar, spacing, taper)
+            costs.append(cost)
+            return result
     try:
         cache_file = _arg(args, "cache")
-        if cache_file:
+        if cache_file and cluster is None:
             try:
                 from ..io.cachefile import attach_cache_file
                 attach_cache_file(integ, cache_file, rebuild=bool(_arg(args, "rebuild_cache")))
@@ -270,7 +293,7 @@ def render_command(args, progress=None) -> int:
                 raise
         with compile_notice(enabled=not quiet and progress is None, bar=bar if progress is None else None):
             result = render_image(scene, view, width, height, pixel_samples=_arg(args, "pixel_samples", 1) or 1,
-                                  progress=bar, integrator=integ)
+                                  progress=bar, integrator=integ, shade=shade)
     finally:
         if progress is None:
             bar.close()
@@ -293,12 +316,14 @@ def render_command(args, progress=None) -> int:
 
         doc = {"command": "render", "scene": str(args.scene), "output": str(args.output), "view": view.options(),
                **stats.as_dict(), "total_seconds": seconds,
+               **({"cluster": costs[0].as_dict()} if costs else {}),
                "luminance": _luminance_summary(result), "settings": {**options.as_dict(), "units": scene.units}}
         atomic_write_text(args.stats, json.dumps(doc, indent=2) + "\n")
     if not quiet:
         lum = _luminance_summary(result)
         print(f"lbl-illum: render {width} x {height} ({view.type_name}, {stats.pixel_samples} "
-              f"sample{'s' if stats.pixel_samples != 1 else ''}/pixel) in {seconds:.2f} s; records per level "
+              f"sample{'s' if stats.pixel_samples != 1 else ''}/pixel) in {seconds:.2f} s"
+              f"{cluster_note(cluster, costs[0] if costs else None)}; records per level "
               f"{stats.records} ({stats.records_made} new); {stats.rays:,} rays; luminance median "
               f"{readable(lum['median'])}, max {readable(lum['max'])} cd/m2 -> {args.output}", file=sys.stderr)
     if glare:

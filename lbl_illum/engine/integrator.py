@@ -360,6 +360,9 @@ class Integrator:
         #: daylight coefficients carried beside the records' irradiance (None: not), a
         #: :class:`lbl_illum.engine.coefficients.CoefficientRecords`
         self.coefficients = None
+        #: keys put between the seed and each random stream's own key: empty for a whole
+        #: run; a part of a run cut into parts (:mod:`lbl_illum.distributed`) has its own
+        self.stream: tuple = ()
 
     # -- the lighting context, read-only ------------------------------------------------
     scene = property(lambda self: self.context.scene, doc="The scene (lengths in metres).")
@@ -386,7 +389,7 @@ class Integrator:
         run.rays_reported = self.tracer.rays_traced
 
     def _rng(self, *key):
-        return np.random.default_rng(np.random.SeedSequence([self.options.seed, *key]))
+        return np.random.default_rng(np.random.SeedSequence([self.options.seed, *self.stream, *key]))
 
     def _level_active(self, k: int) -> bool:
         """Whether records of level k can be non-zero (else they are never made)."""
@@ -397,6 +400,12 @@ class Integrator:
         hi = np.maximum(self.scene.triangles.bounds[1], points.max(axis=0))
         half = 0.5 * float(np.max(hi - lo)) * 1.01 + 1e-9
         return IrradianceCache(self.fingerprint, self.accuracies, 0.5 * (lo + hi), half, anisotropic=self.hessian)
+
+    def empty_cache(self, points) -> IrradianceCache:
+        """A cache without records for this scene and these options whose root cube holds
+        the scene and ``points`` (n, 3) [m]: the one :meth:`compute` starts from when it
+        has none (a run cut into parts starts every part from it)."""
+        return self._new_cache(np.asarray(points, np.float64).reshape(-1, 3))
 
     # -- spacing ----------------------------------------------------------------------
     def default_spacing(self, points, normals) -> tuple[float, float]:
@@ -593,6 +602,29 @@ class Integrator:
             self._tick(run)
         return pending, None
 
+    def _answer_points(self, points, normals, origins, own0, taper):
+        """(direct, indirect) (n, 3) [lux] at the query points: the direct light by shadow
+        rays, the indirect from level 0's complete record set (or each point's own record,
+        ``own0``; ``own0 is False``: level 0 was not solved, no indirect light)."""
+        direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
+                                         light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
+        if own0 is False:
+            return direct, np.zeros_like(direct)
+        return direct, self._answer(0, points, normals, own0, taper)
+
+    def answer(self, points, normals, taper: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """(direct, indirect) (n, 3) [lux] at (n, 3) ``points`` [m] facing unit ``normals``
+        from the records the cache holds, making none: the last step of :meth:`compute`
+        (the same random stream for the direct light), for points whose records a run cut
+        into parts made (:mod:`lbl_illum.distributed`).  A level 0 without interpolation
+        (point samples) answers nothing here: its indirect part is zero."""
+        points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
+        normals = np.asarray(normals, np.float64).reshape(-1, 3)
+        normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        origins = None if self.direct.is_dark else self.tracer.sensor_origins(points, normals)
+        interpolates = len(points) > 0 and self._level_active(0) and self.cache.levels[0].accuracy > 0
+        return self._answer_points(points, normals, origins, None if interpolates else False, taper)
+
     # -- evaluation (bottom-up) --------------------------------------------------------
     def _answer(self, k, P, Ns, own_record, taper=False):
         """Irradiance of level k at queries, from its complete record set."""
@@ -712,7 +744,7 @@ class Integrator:
 
     # -- the whole calculation -----------------------------------------------------------
     def compute(self, points, normals, spacing: tuple[float, float] | None = None,
-                taper: bool = False) -> IlluminanceResult:
+                taper: bool = False, *, roi: tuple | None = None, solve_only: bool = False) -> IlluminanceResult:
         """Illuminance at (n, 3) ``points`` [m] with (n, 3) unit ``normals``.
 
         ``taper``: the points' indirect light is the weighted mean of the records' values
@@ -745,6 +777,13 @@ class Integrator:
         finds every query of a finished block covered and places the open blocks exactly
         as the first run did (their records and random streams are the same), and so
         gives bit-identical results to a run that was never interrupted.
+
+        For runs cut into parts (:mod:`lbl_illum.distributed`): ``roi = (lo, hi)`` [m] is
+        the box of the whole run's points, which sizes the records instead of the box of
+        ``points``; ``solve_only`` makes the records the points need and stops there: no
+        direct light at the points, and the result's indirect part holds only what a level
+        0 without interpolation gives (each point's own record), else zeros — the points
+        are answered later from the complete record set (:meth:`answer`).
         """
         t0 = time.perf_counter()
         rays_before = self.tracer.rays_traced
@@ -767,7 +806,8 @@ class Integrator:
         max_spacing = given_max if given_max else auto_max
         min_spacing = min(given_min if given_min else auto_min, max_spacing)
         stats.min_spacing, stats.max_spacing = min_spacing, max_spacing
-        roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
+        if roi is None:
+            roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))
         portal_luminance = self.context.portal_luminance(roi) if self.portals is not None else None
         inside = self.context.inside_stats(portal_luminance) if self.portals is not None else (0.0, 0.0)
         run = RunPlan(B, min_spacing, max_spacing, roi, portal_luminance, inside, stats, rays_reported=rays_before)
@@ -787,13 +827,12 @@ class Integrator:
                     own0 = self._solve_level(0, _Queries(points, normals, normals, origins), run)
 
                 # answers at the query points
-                self._tick(run, "direct light at the points", done=1.0)
-                direct = self.direct.illuminance(points, normals, normals, self._rng(_TAG_DIRECT_QUERIES),
-                                                 light_samples=QUERY_LIGHT_SAMPLES, origins=origins)
-                if solved:
-                    indirect = self._answer(0, points, normals, own0, taper)
+                if solve_only:
+                    direct = np.zeros((len(points), 3))
+                    indirect = self._answer(0, points, normals, own0) if own0 is not None else np.zeros_like(direct)
                 else:
-                    indirect = np.zeros_like(direct)
+                    self._tick(run, "direct light at the points", done=1.0)
+                    direct, indirect = self._answer_points(points, normals, origins, own0 if solved else False, taper)
             except BaseException as exc:
                 with keeper.hold() if keeper is not None else contextlib.nullcontext():
                     gained = self._drop_unevaluated(start, run)

@@ -351,7 +351,7 @@ def edge_pixels(material: np.ndarray, normal: np.ndarray, offset: np.ndarray, di
 
 def render_image(scene: Scene, view: View, width: int, height: int, options: Options | None = None,
            pixel_samples: int = 1, cache: IrradianceCache | None = None, progress=None,
-           integrator: Integrator | None = None) -> RenderResult:
+           integrator: Integrator | None = None, shade=None) -> RenderResult:
     """Render the luminance image [cd/m²] of ``view``, ``width`` × ``height`` pixels.
 
     Parameters
@@ -368,6 +368,10 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
     progress : object with ``update(rays)`` and ``describe(text)`` (a tqdm adapter)
     integrator : an :class:`~lbl_illum.engine.integrator.Integrator` to use instead of a new
         one (its cache is used and grows); ``options`` and ``cache`` must then be None
+    shade : what gives the illuminance at the diffuse hits in place of
+        ``integrator.compute``: called as ``shade(points, normals, spacing, taper)``, it
+        returns an :class:`~lbl_illum.engine.integrator.IlluminanceResult` (a run on a
+        cluster, :func:`lbl_illum.distributed.rounds.solve_points`)
 
     Returns
     -------
@@ -437,7 +441,12 @@ def render_image(scene: Scene, view: View, width: int, height: int, options: Opt
     if len(hits["ray"]):
         # record spacing from the view where the options give none (view_spacing)
         spacing = view_spacing(hits["P"]) if opts.min_spacing is None and opts.max_spacing is None else None
-        result = integ.compute(hits["P"], hits["N"], spacing=spacing, taper=True)
+        if shade is None:
+            result = integ.compute(hits["P"], hits["N"], spacing=spacing, taper=True)
+        else:                       # its rays are counted where they were traced, in its stats
+            here = integ.tracer.rays_traced
+            result = shade(hits["P"], hits["N"], spacing, True)
+            rays_before += integ.tracer.rays_traced - here - result.stats.rays
         _scatter_add(radiance, hits["ray"], hits["weight"] * result.rgb)
         rs = result.stats
         stats.records, stats.new_records, stats.queries = list(rs.records), list(rs.new_records), list(rs.queries)

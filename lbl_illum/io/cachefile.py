@@ -34,7 +34,7 @@ from .files import atomic_write_bytes
 from .locking import file_lock
 
 __all__ = ["CacheData", "CacheFile", "attach_cache_file", "CACHE_FORMAT_VERSION", "Terminated", "cache_data", "cache_from_data",
-           "save_cache", "load_cache", "read_cache_file", "write_cache_file", "merge_cache_data",
+           "save_cache", "save_cache_data", "load_cache", "read_cache_file", "write_cache_file", "merge_cache_data",
            "record_settings", "settings_differences", "sigterm_as_interrupt", "deferred_interrupts"]
 
 CACHE_FORMAT = "lbl_illum irradiance cache"
@@ -97,7 +97,13 @@ def save_cache(cache: IrradianceCache, path: str | os.PathLike, merge: bool = Tr
     Interruptions (SIGINT, SIGTERM) that arrive while the file is written are acted
     on once it is in place.  Returns the records per level the file now holds.
     """
-    data = cache_data(cache)
+    return save_cache_data(cache_data(cache), path, merge)
+
+
+def save_cache_data(data: "CacheData", path: str | os.PathLike, merge: bool = True) -> list[int]:
+    """:func:`save_cache` for a file's contents ``data`` (:func:`cache_data`) rather than
+    a cache: written atomically under the file's lock, merged with what the file holds
+    (``data``'s records first); returns the records per level the file now holds."""
     with file_lock(path):
         with deferred_interrupts():
             if merge and Path(path).exists():
