@@ -61,6 +61,9 @@ def add_annual_arguments(parser) -> None:
     o.add_argument("--healthcare", action="store_true", help="LEED v4.1 points of the Healthcare column")
     o.add_argument("--area", metavar="NAME", help="the area whose mean the day x hour map shows (default: all points)")
     o.add_argument("--no-plots", action="store_true", help="no PNG plots (they need matplotlib)")
+    o.add_argument("--ill", action="store_true",
+                   help="with --points MODEL.hbjson: also Honeybee's text results, results/GRID.ill (sensors x "
+                        "sun-up hours, about 8 bytes a value), which honeybee-radiance's annual post-processing reads")
     v = parser.add_argument_group("annual glare", "At the eyes of named views ([views.NAME] in the scene file; a "
                                   "180 degree field along each view's direction): the vertical illuminance of every "
                                   "hour, the simplified DGP, and the DGP with the sun and the sky patches above the "
@@ -91,6 +94,8 @@ def _check(args) -> None:
         raise InputError(f"-o {args.output}: folder {out.parent} does not exist")
     if args.dst and args.schedule:
         raise InputError("--dst goes with the LM-83 hours, not with --schedule (give the schedule in clock time)")
+    if args.ill and Path(args.points).suffix.lower() != ".hbjson":
+        raise InputError("--ill writes Honeybee's results of a model's sensor grids: give --points MODEL.hbjson")
     _shade_groups(args)
 
 
@@ -226,7 +231,8 @@ def annual_command(args) -> int:
         from ..io.honeybee_results import write_annual_folder
         from ..scene.honeybee import read_grids
 
-        write_annual_folder(out / "results", read_grids(args.points), E_grid, D_grid, matrix.sun_altitude > 0.0)
+        write_annual_folder(out / "results", read_grids(args.points), E_grid, D_grid, matrix.sun_altitude > 0.0,
+                            ill=args.ill)
     if glare:
         doc = {"views": {name: {"position": list(views[name].position), "direction": list(views[name].direction),
                                 **g.summary(occupancy)} for name, g in glare.items()},

@@ -11,12 +11,16 @@
   ``sun-up-hours.txt`` (the hours of the year of the sun-up rows, row r as r + 0.5),
   ``study_info.json`` (timestep 1, the 8760 study hours) and ``grid_states.json``
   (static apertures only): what ``honeybee-radiance-postprocess``'s ``Results`` reads.
+  With ``ill``, also ``FOLDER/{grid}.ill``: the same total illuminance as text, a row per
+  sensor and a tab-separated column per sun-up hour, the layout of the earlier recipes
+  that ``honeybee_radiance.postprocess.annualdaylight.metrics_from_folder`` reads.
 
 Every file is written whole (a temporary name, then a rename).
 """
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
@@ -49,9 +53,18 @@ def write_res_folder(folder: str | Path, grids, values) -> None:
     atomic_write_text(folder / "grids_info.json", _info(grids))
 
 
-def write_annual_folder(folder: str | Path, grids, illuminance, direct_sun, sun_up) -> None:
+def _ill_text(values: np.ndarray) -> str:
+    """Rows of tab-separated values [lux], each to 2 decimals (0.01 lux; Radiance's
+    ``rmtxop -fa`` habit), as numpy formats them in one call."""
+    buffer = io.StringIO()
+    np.savetxt(buffer, values, fmt="%.2f", delimiter="\t")
+    return buffer.getvalue()
+
+
+def write_annual_folder(folder: str | Path, grids, illuminance, direct_sun, sun_up, ill: bool = False) -> None:
     """The annual layout of Honeybee's recipes (module text): ``illuminance`` and
-    ``direct_sun`` (n, 8760) [lux], ``sun_up`` (8760,) bool, the rows written."""
+    ``direct_sun`` (n, 8760) [lux], ``sun_up`` (8760,) bool, the rows written; ``ill``:
+    the ``.ill`` text files too."""
     folder = Path(folder)
     rows = np.flatnonzero(sun_up)
     for kind, data in (("total", illuminance), ("direct", direct_sun)):
@@ -59,6 +72,9 @@ def write_annual_folder(folder: str | Path, grids, illuminance, direct_sun, sun_
         target.mkdir(parents=True, exist_ok=True)
         for grid, part in _split(grids, data):
             atomic_write_npy(target / f"{grid.identifier}.npy", part[:, rows])
+    if ill:
+        for grid, part in _split(grids, illuminance):
+            atomic_write_text(folder / f"{grid.info['full_id']}.ill", _ill_text(np.asarray(part[:, rows], np.float32)))
     atomic_write_text(folder / "grids_info.json", _info(grids))
     atomic_write_text(folder / "sun-up-hours.txt", "".join(f"{r + 0.5:g}\n" for r in rows))
     atomic_write_text(folder / "study_info.json", json.dumps(

@@ -147,6 +147,7 @@ def test_views_give_annual_glare(tmp_path):
     (lambda t: ["--shade", "a=glazing", "--shade", "a=glazing"], "given twice"),
     (lambda t: ["--shade-transmittance", "2"], "--shade-transmittance"),
     (lambda t: ["--views", "nowhere"], "no [views.nowhere]"),
+    (lambda t: ["--ill"], "--ill writes Honeybee's results"),
     (lambda t: ["--weather", str(t / "dark.wea")], "no occupied hour has daylight"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, change, expect):

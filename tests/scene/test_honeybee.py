@@ -72,7 +72,7 @@ def test_results_go_out_as_res_files(job, capsys):
 def test_annual_results_in_honeybees_layout(job):
     out = job / "year"
     assert main(["annual", str(job / "scene.toml"), "--points", str(job / "model.hbjson"), "--weather", str(EPW),
-                 "-o", str(out), "-q", "--no-plots", *QUICK]) == 0
+                 "-o", str(out), "-q", "--no-plots", "--ill", *QUICK]) == 0
     results = out / "results"
     sun_up = np.loadtxt(results / "sun-up-hours.txt")
     total = np.load(results / "__static_apertures__" / "default" / "total" / "Tiny_Garage.npy")
@@ -80,6 +80,16 @@ def test_annual_results_in_honeybees_layout(job):
     E = np.load(out / "illuminance.npy")
     np.testing.assert_array_equal(total, E[200:, (sun_up - 0.5).astype(int)])
     summary = json.loads((out / "summary.json").read_text())
+    # the text .ill of the earlier recipes: the same values to 0.01 lux, and the DA that
+    # honeybee-radiance's own post-processing computes from it equals ours (it rounds each
+    # point's DA to 0.01 %: measured within 2.3e-4 % in the mean)
+    ill = np.loadtxt(results / "Tiny_Garage.ill", delimiter="\t")
+    np.testing.assert_allclose(ill, total, atol=0.005 + 1e-6 * total.max())
+    from honeybee_radiance.postprocess.annualdaylight import metrics_from_folder
+
+    da = metrics_from_folder(str(results), threshold=300)[0]
+    for d, g in zip(da, json.loads((results / "grids_info.json").read_text())):
+        assert np.mean(d) == pytest.approx(summary["areas"][g["identifier"]]["da"], abs=0.005)
     try:
         from honeybee_radiance_postprocess.results.annual_daylight import AnnualDaylight
     except ImportError:
