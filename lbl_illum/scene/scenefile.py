@@ -507,7 +507,7 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
             if chunk is not None:
                 chunks.append(chunk)
         elif "file" in entry:
-            chunks.append(_file_chunk(entry, label, base_dir, scale, ids, warnings))
+            chunks.append(_file_chunk(entry, label, base_dir, scale, ids, warnings, materials, radiance))
         elif "shape" in entry:
             chunk, shape = _shape_chunk(entry, label, scale, ids, len(centers))
             chunks.append(chunk)
@@ -619,6 +619,26 @@ def _material_id(name: Any, label: str, ids: dict[str, int]) -> int:
     return ids[name]
 
 
+def _own_name_material(part, label: str, ids: dict[str, int], materials: list[Material] | None,
+                       definitions: dict, warnings: list[str]) -> int | None:
+    """Id of the material named like one of the sub-mesh's names (``part.keys``, most
+    specific first): a material already defined, else a Radiance modifier of that name
+    in ``definitions`` (made a material).  None when no name has one."""
+    key = next((k for k in part.keys if k in ids), None)
+    if key is not None:
+        return ids[key]
+    key = next((k for k in part.keys if k in definitions), None)
+    if key is None or materials is None:
+        return None
+    from .radfile import material_name
+
+    name = material_name(key, definitions)
+    if name not in ids:
+        _radiance_materials([name], definitions, label, ids, materials, warnings)
+    ids[key] = ids[name]
+    return ids[key]
+
+
 def _shape_chunk(entry: Mapping[str, Any], label: str, scale: float, ids: dict[str, int], sphere_index: int):
     """A primitive entry (``shape = ...``) as a chunk and its :class:`~lbl_illum.scene.geometry.Shape`."""
     shape = shape_from_table(entry, label, scale, extra_keys=("material",))
@@ -631,9 +651,15 @@ def _shape_chunk(entry: Mapping[str, Any], label: str, scale: float, ids: dict[s
 
 
 def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: float,
-                ids: dict[str, int], warnings: list[str]) -> _Chunk:
+                ids: dict[str, int], warnings: list[str], materials: list[Material] | None = None,
+                radiance: dict | None = None) -> _Chunk:
     """A geometry-file entry: every sub-mesh gets its mapped material or the default.
-    Faces triangulated with a mismatch of areas are reported in ``warnings``."""
+    Without either, a sub-mesh takes the material of its own name (its names in the order
+    of the mapping), a ``[materials]`` table or, as Radiance's ``obj2rad`` and ``mesh``
+    make a ``usemtl`` name a modifier, a modifier defined in the scene's Radiance files
+    (``radiance``, :func:`_radiance_files`; made a material and appended to
+    ``materials``).  Faces triangulated with a mismatch of areas are reported in
+    ``warnings``."""
     check_keys(entry, FILE_KEYS, label)
     file = entry["file"]
     if not isinstance(file, str) or not file:
@@ -645,15 +671,19 @@ def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: flo
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
     label = f"{label} {file}"
     parts = load_mesh_file(base_dir / file, label, scale, warnings)
+    definitions = {p.name: (p, w) for prims_, w in (radiance or {}).values() for p in prims_}
     vertices, material, matched = [], [], set()
     for part in parts:
         key = next((k for k in part.keys if k in mapped), None)
-        if key is None and default is None:
-            raise InputError(f"{label}: no material for sub-mesh {part.label}: map it in 'materials' "
-                             "or give a default 'material'")
+        mid = default if key is None else mapped[key]
+        if mid is None:
+            mid = _own_name_material(part, label, ids, materials, definitions, warnings)
+        if mid is None:
+            raise InputError(f"{label}: no material for sub-mesh {part.label}: map it in 'materials', "
+                             "give a default 'material', or define a material of its name")
         matched.add(key)
         vertices.append(part.vertices)
-        material.append(np.full(len(part.vertices), default if key is None else mapped[key], dtype=np.int32))
+        material.append(np.full(len(part.vertices), mid, dtype=np.int32))
     _check_mapping_used(mapped, matched, parts, label)
     v = np.concatenate(vertices)
     return _Chunk(label, v, np.concatenate(material), np.full(len(v), -1, dtype=np.int32))

@@ -237,6 +237,27 @@ def test_unmapped_submesh_without_default():
         scene_from_dict(data, DATA, "s.toml")
 
 
+def test_unmapped_submesh_takes_the_material_of_its_name(tmp_path):
+    """Without a mapping or a default, a sub-mesh takes a material named like one of its
+    names (most specific first): a [materials] table, else a modifier of a Radiance file
+    of the scene (Radiance's obj2rad makes a usemtl name a modifier); an alias is
+    followed, and only the modifiers used become materials."""
+    import shutil
+
+    shutil.copy(DATA / "room_corner.obj", tmp_path)
+    (tmp_path / "trim.mat").write_text("void metal brass\n0\n0\n5 .9 .6 .2 .8 .05\n\nvoid alias Trim brass\n")
+    data = minimal()
+    data["geometry"] = [{"file": "trim.mat"}, {"file": "room_corner.obj", "materials": {"Wall": "floor"}}]
+    data["materials"]["white"] = {"type": "diffuse", "reflectance": 0.8}
+    scene = scene_from_dict(data, tmp_path, "s.toml")
+    names = [m.name for m in scene.materials]
+    used = {names[i] for i in np.unique(scene.triangles.material)}
+    assert used == {"floor", "brass"}             # group 'floor' (a table), usemtl 'Trim' (the alias)
+    assert len(scene.materials) == 3
+    brass = scene.materials[names.index("brass")]
+    assert brass.kind == "metal" and brass.reflectance == (0.9, 0.6, 0.2) and brass.specularity == 0.8
+
+
 @pytest.mark.parametrize("reflectance, message", [(-0.1, "must be >= 0"), (1.5, "must be <= 1"),
                                                   ("high", "must be a number")])
 def test_bad_reflectance(tmp_path, reflectance, message):
