@@ -15,7 +15,8 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from .shared import finite, run_options
+from .shared import (add_cluster_arguments, check_cluster_arguments, cluster_note, finite, open_study_cluster,
+                     run_options)
 
 __all__ = ["add_annual_arguments", "annual_command", "ANNUAL_PRESET", "OUTPUT_FILES", "PLOT_FILES"]
 
@@ -82,6 +83,7 @@ def add_annual_arguments(parser) -> None:
                         "several groups)")
     s.add_argument("--shade-transmittance", type=finite(0.0, 1.0), default=DEFAULT_SHADE_TRANSMITTANCE, metavar="F",
                    help=f"closed shades let through F times the glazing's light (default {DEFAULT_SHADE_TRANSMITTANCE:g})")
+    add_cluster_arguments(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress display and no summary line")
 
 
@@ -97,6 +99,7 @@ def _check(args) -> None:
     if args.ill and Path(args.points).suffix.lower() != ".hbjson":
         raise InputError("--ill writes Honeybee's results of a model's sensor grids: give --points MODEL.hbjson")
     _shade_groups(args)
+    check_cluster_arguments(args)
 
 
 def _shade_groups(args) -> dict[str, list[str]]:
@@ -127,7 +130,20 @@ def _plots_wanted(args) -> bool:
 
 
 def annual_command(args) -> int:
-    """``lbl-illum annual``: compute, write OUTDIR, print one line; 0."""
+    """``lbl-illum annual``: compute, write OUTDIR, print one line; 0.  With ``--workers`` or
+    ``--scheduler`` the coefficients and the direct sun are computed on a cluster
+    (:mod:`lbl_illum.distributed.annual`)."""
+    _check(args)
+    cluster = open_study_cluster(args)
+    try:
+        return _annual(args, cluster)
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def _annual(args, cluster) -> int:
+    """:func:`annual_command` once the arguments are checked and the cluster (or None) is open."""
     import numpy as np
 
     from ..daylight.skymatrix import sky_matrix
@@ -141,7 +157,6 @@ def annual_command(args) -> int:
     from .progress import ProgressBar, compile_notice
 
     t0 = time.perf_counter()
-    _check(args)
     plots = _plots_wanted(args)
     scene = load_scene(args.scene)
     points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
@@ -182,6 +197,7 @@ def annual_command(args) -> int:
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
     bar = ProgressBar(enabled=not args.quiet)
+    solver, costs = _solver(args, cluster, bar)
     groups = []
     n = len(points)
     eyes = np.array([v.position for v in views.values()], np.float64).reshape(-1, 3)       # metres
@@ -190,11 +206,12 @@ def annual_command(args) -> int:
     try:
         with compile_notice(enabled=not args.quiet, bar=bar):
             light = annual_light(scene, sensors, facing, weather, options, ground_reflectance=rho_g, progress=bar,
-                                 matrix=matrix)
+                                 matrix=matrix, solve=solver())
             for name, closed in shades.items():
                 bar.describe(f"shades of {name} closed")
                 year = annual_light(closed, points, normals, weather, options, ground_reflectance=rho_g,
-                                    progress=bar, matrix=matrix)
+                                    progress=bar, matrix=matrix,
+                                    solve=solver((_shade_groups(args)[name], args.shade_transmittance)))
                 groups.append(metrics.WindowGroup(name, year.illuminance, year.direct_sun))
             glare = _glare(views, eyes, light, matrix, args, n, bar) if views else {}
     finally:
@@ -215,6 +232,9 @@ def annual_command(args) -> int:
                "shade_transmittance": args.shade_transmittance if shades else None,
                "bytes_per_record": light.record_bytes, "sun_positions": int(len(light.sun_directions)),
                "seconds": None, **summary}
+    if costs:
+        summary["cluster"] = {"chunk_size": args.chunk_size, "round_chunks": args.round_chunks,
+                              "runs": [c.as_dict() for c in costs]}
 
     out = Path(args.output)
     out.mkdir(exist_ok=True)
@@ -255,8 +275,24 @@ def annual_command(args) -> int:
         print(f"lbl-illum: a year at {len(points)} points ({int(result.open.occupied_hours)} occupied hours): "
               f"sDA{args.threshold:g} {o['sda']:.0f} %{ase}{views_text}, mean DA {readable(o['da'])} %, "
               f"UDI 100-3000 {readable(o['udi']['useful'])} %, LEED {summary['leed']['points']} points; "
-              f"records per level {stats.records}, {stats.rays:,} rays, {seconds:.1f} s -> {out}", file=sys.stderr)
+              f"records per level {stats.records}, {stats.rays:,} rays, {seconds:.1f} s"
+              f"{cluster_note(cluster, costs[0] if costs else None)} -> {out}", file=sys.stderr)
     return 0
+
+
+def _solver(args, cluster, bar):
+    """``(solver, costs)``: ``solver(shades=None)`` gives the ``solve`` of
+    :func:`~lbl_illum.engine.annual.annual_light` on the cluster (None without one); the
+    runs' costs gather in ``costs``."""
+    costs = []
+    if cluster is None:
+        return (lambda shades=None: None), costs
+    from ..distributed.annual import annual_solver
+    from ..distributed.plan import CHUNK_POINTS, ROUND_CHUNKS, Decomposition
+
+    plan = Decomposition(args.chunk_size or CHUNK_POINTS, args.round_chunks or ROUND_CHUNKS)
+    path = str(Path(args.scene).resolve())
+    return (lambda shades=None: annual_solver(cluster, path, plan, bar, shades, costs)), costs
 
 
 def _views(scene, args) -> dict:

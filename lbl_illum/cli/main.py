@@ -274,6 +274,15 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="auto (default): each pane as its model says — Fresnel single panes as Radiance's glass, "
                         "double panes and constant panes as BRTDfunc; or every pane as glass, or as BRTDfunc")
     x.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
+    from .batch import add_batch_arguments
+    add_batch_arguments(sub.add_parser(
+        "batch", help="many studies (scenes, variants, grids, views, weather files) on one cluster",
+        description=textwrap.fill(
+            "Run the studies of a batch file (TOML: [defaults] and [[study]] tables, each a run of illuminance, "
+            "daylight-factor, render or annual with that command's options; a scene may be a glob of variants) "
+            "one after the other on one cluster, with one progress display and one summary table.  Every study "
+            "is checked before any runs.  See docs/distributed.md.", 88)))
+
     from .cache import add_cache_commands
 
     add_cache_commands(sub)
@@ -804,6 +813,9 @@ def main(argv=None) -> int:
             return _run_validate(args)
         if args.command == "export":
             return _run_export(args)
+        if args.command == "batch":
+            from .batch import batch_command
+            return batch_command(args, parser)
         if args.command == "cache":
             from .cache import run_cache_command
             return run_cache_command(args)

@@ -128,7 +128,9 @@ def check_cluster_arguments(args) -> None:
 
 def open_study_cluster(args):
     """The cluster of ``args`` (connected and checked: :func:`lbl_illum.distributed.cluster.open_cluster`),
-    or None for an ordinary run."""
+    or None for an ordinary run; the one a batch lends its studies (``args.cluster``) if set."""
+    if getattr(args, "cluster", None) is not None:
+        return args.cluster
     check_cluster_arguments(args)
     workers, scheduler = getattr(args, "workers", None), getattr(args, "scheduler", None)
     if workers is None and scheduler is None:

@@ -111,7 +111,7 @@ def _tick(progress, text=None, done=None, rays=0):
 
 def solve_points(cluster, recipe: SceneRecipe, integ: Integrator, points, normals, spacing=None,
                  taper: bool = False, plan: Decomposition = Decomposition(), cache_file=None, rebuild: bool = False,
-                 progress=None, coefficients: dict | None = None):
+                 progress=None, coefficients: dict | None = None, answer: bool = True):
     """Illuminance at (n, 3) ``points`` [m] facing ``normals`` by rounds of chunks (module
     text) on ``cluster`` (:mod:`.cluster`).
 
@@ -122,6 +122,8 @@ def solve_points(cluster, recipe: SceneRecipe, integ: Integrator, points, normal
     cache_file, rebuild : keep the records in this file (read first, written after each
         round; docs/cache-files.md)
     coefficients : ``{"mf", "suns"}``: records carry daylight coefficients (annual runs)
+    answer : answer the points (else the result holds only what the rounds give: the
+        points' own records' indirect light with point samples, else zeros)
 
     Returns ``(result, costs, vectors)``: an :class:`IlluminanceResult` whose stats sum
     the tasks', the :class:`RunCosts`, and the points' coefficient vectors (or None).
@@ -199,20 +201,22 @@ def solve_points(cluster, recipe: SceneRecipe, integ: Integrator, points, normal
                     keeper.rebuild = False
                     cost.seconds["save"] = time.perf_counter() - t
                 costs.rounds.append(cost)
-            _tick(progress, f"answering {len(points)} points from {sum(base.record_counts):,} records")
-            t = time.perf_counter()
-            shared = cluster.share(base)
-            costs.answer_send = time.perf_counter() - t
-            t = time.perf_counter()
-            answers = cluster.run(answer_chunk, [(recipe, opts, shared, points[s], normals[s], c, taper)
-                                                 for c, s in enumerate(chunks)], done(ANSWER_WEIGHT))
-            costs.answer_wall = time.perf_counter() - t
+            answers = []
+            if answer:
+                _tick(progress, f"answering {len(points)} points from {sum(base.record_counts):,} records")
+                t = time.perf_counter()
+                shared = cluster.share(base)
+                costs.answer_send = time.perf_counter() - t
+                t = time.perf_counter()
+                answers = cluster.run(answer_chunk, [(recipe, opts, shared, points[s], normals[s], c, taper)
+                                                     for c, s in enumerate(chunks)], done(ANSWER_WEIGHT))
+                costs.answer_wall = time.perf_counter() - t
     except KeyboardInterrupt as exc:
         if saved is not None:
             exc.saved_records, exc.saved_cache = saved, keeper.name
         raise
-    direct = np.concatenate([a[0] for a in answers]) if answers else np.zeros((0, 3))
-    indirect = np.concatenate([a[1] for a in answers]) if answers else np.zeros((0, 3))
+    direct = np.concatenate([a[0] for a in answers]) if answers else np.zeros((len(points), 3))
+    indirect = np.concatenate([a[1] for a in answers]) if answers else np.zeros((len(points), 3))
     stats.rays += int(sum(a[2] for a in answers))
     if any(o is not None for o in own):
         indirect = indirect + np.concatenate(own)

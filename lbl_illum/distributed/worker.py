@@ -37,7 +37,7 @@ from ..options import Options
 from .records import record_delta
 
 __all__ = ["SceneRecipe", "ChunkRecords", "scene_context", "remember", "forget", "solve_chunk", "answer_chunk",
-           "scene_check", "STREAM_TAG"]
+           "direct_sun_chunk", "scene_check", "STREAM_TAG"]
 
 #: First key of a part's random streams (:attr:`Integrator.stream`), then the chunk index:
 #: no whole run's stream (seed, tag, ...) starts with it (the engine's tags are below 20).
@@ -47,19 +47,23 @@ STREAM_TAG = 1021
 @dataclass(frozen=True)
 class SceneRecipe:
     """How a worker makes the scene of a run: the scene file (an absolute path the worker
-    reads: a shared file system, as Radiance's ambient files on NFS) and, with
+    reads: a shared file system, as Radiance's ambient files on NFS); with
     ``replace_sky``, the sky and sun that replace the file's (the daylight factor's CIE
-    overcast sky, the annual study's design sky)."""
+    overcast sky, the annual study's design sky); ``shades``, ``(materials, factor)``
+    the glazing closed by a window group's shades
+    (:func:`lbl_illum.engine.annual.shaded_scene`)."""
 
     path: str
     sky: object = None
     sun: object = None
     replace_sky: bool = False
+    shades: tuple | None = None
 
     @property
     def key(self) -> str:
         """A name for the recipe, the same in every process."""
-        return hashlib.sha256(pickle.dumps((self.path, self.sky, self.sun, self.replace_sky))).hexdigest()[:16]
+        return hashlib.sha256(pickle.dumps((self.path, self.sky, self.sun, self.replace_sky,
+                                            self.shades))).hexdigest()[:16]
 
     def build(self):
         """(scene, lighting context): the file read and the context built here."""
@@ -68,6 +72,10 @@ class SceneRecipe:
         scene = load_scene(self.path)
         if self.replace_sky:
             scene = dataclasses.replace(scene, sky=self.sky, sun=self.sun)
+        if self.shades is not None:
+            from ..engine.annual import shaded_scene
+
+            scene = shaded_scene(scene, *self.shades)
         return scene, LightingContext.of(scene)
 
 
@@ -179,3 +187,15 @@ def answer_chunk(recipe: SceneRecipe, options: Options, final: CacheData, points
     before = integ.tracer.rays_traced
     direct, indirect = integ.answer(points, normals, taper=taper)
     return direct, indirect, integ.tracer.rays_traced - before
+
+
+def direct_sun_chunk(recipe: SceneRecipe, sun: tuple, points, normals):
+    """(direct, rays): the (n, hours) float32 direct sun [lux] at a chunk's points, ``sun``
+    being ``(directions (hours, 3), direct normal illuminance (hours,) [lux])``
+    (:func:`~lbl_illum.engine.sun_hours.direct_sun_matrix`: shadow rays, no random numbers)."""
+    from ..engine.sun_hours import direct_sun_matrix
+
+    _, context = scene_context(recipe)
+    before = context.tracer.rays_traced
+    direct = direct_sun_matrix(context.direct, context.tracer, points, normals, *sun)
+    return direct, context.tracer.rays_traced - before

@@ -134,7 +134,7 @@ def sun_positions(matrix: SkyMatrix, latitude: float, step: float = SUN_STEP) ->
 
 def annual_light(scene, points, normals, weather: HourlyWeather, options: Options | None = None, mf: int = 1,
                  values: str = "irradiance", ground_reflectance: float | None = None, progress=None,
-                 matrix: SkyMatrix | None = None, design=None) -> AnnualLight:
+                 matrix: SkyMatrix | None = None, design=None, solve=None) -> AnnualLight:
     """The illuminance of every row of ``weather`` at (n, 3) ``points`` [m] facing unit
     ``normals`` (module text).
 
@@ -144,7 +144,12 @@ def annual_light(scene, points, normals, weather: HourlyWeather, options: Option
     ground_reflectance : of the ground glow (default: the scene sky's);  progress : as the
     integrator's;  matrix : a sky matrix made already (``sun="separate"``);  design :
     ``(sky, sun)`` that place the records instead of the CIE overcast sky (for measuring
-    that choice)
+    that choice);  solve : what computes the coefficients and the direct sun in place of
+    this process — called as ``solve(design_scene, integrator, matrix, suns, points,
+    normals)``, it returns ``(stats, vectors, direct, record_bytes)``: the run's
+    :class:`RunStats`, the (n, K) photometric coefficient vectors of the points, the (n,
+    hours) direct sun and the bytes of coefficients a record holds (a run on a cluster,
+    :func:`lbl_illum.distributed.annual.annual_solver`)
     """
     t0 = time.perf_counter()
     options = options or scene.options
@@ -159,22 +164,27 @@ def annual_light(scene, points, normals, weather: HourlyWeather, options: Option
     normals = np.asarray(normals, np.float64).reshape(-1, 3)
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     integrator = Integrator(design, options, progress=progress)
-    dc = CoefficientRecords(integrator, matrix.patches.mf, suns)
-    result = integrator.compute(points, normals)
-    own = np.arange(len(points)) if integrator.cache.levels[0].accuracy == 0.0 else None
-    vectors = dc.photometric(dc.at_points(points, normals, own))
-    D, G = vectors[:, :dc.patches], vectors[:, dc.patches:]
-    if progress is not None:
-        progress.describe("direct sun, hour by hour")
-    direct = direct_sun_matrix(integrator.direct, integrator.tracer, points, normals, matrix.sun_direction,
-                               matrix.direct_normal_illuminance)
+    if solve is None:
+        dc = CoefficientRecords(integrator, matrix.patches.mf, suns)
+        result = integrator.compute(points, normals)
+        own = np.arange(len(points)) if integrator.cache.levels[0].accuracy == 0.0 else None
+        vectors = dc.photometric(dc.at_points(points, normals, own))
+        if progress is not None:
+            progress.describe("direct sun, hour by hour")
+        direct = direct_sun_matrix(integrator.direct, integrator.tracer, points, normals, matrix.sun_direction,
+                                   matrix.direct_normal_illuminance)
+        stats, record_bytes = result.stats, dc.channels * dc.sources * 4
+    else:
+        stats, vectors, direct, record_bytes = solve(design, integrator, matrix, suns, points, normals)
+    patches = vectors.shape[1] - len(suns)
+    D, G = vectors[:, :patches], vectors[:, patches:]
     E = D @ np.asarray(matrix.luminance, np.float32)
     if len(suns):
         E += G @ shares
     E += direct
     np.maximum(E, 0.0, out=E)
     return AnnualLight(illuminance=E, direct_sun=direct, sky=matrix, sky_coefficients=D, sun_coefficients=G,
-                       sun_directions=suns, stats=result.stats, record_bytes=dc.channels * dc.sources * 4,
+                       sun_directions=suns, stats=stats, record_bytes=record_bytes,
                        seconds=time.perf_counter() - t0, context=integrator.context)
 
 

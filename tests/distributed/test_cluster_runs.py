@@ -143,3 +143,26 @@ def test_command_on_the_scheduler_writes_the_bits_of_workers_0(local, tmp_path, 
     assert f"on {cluster.scheduler_address} (2 rounds)" in err
     assert (tmp_path / "here.csv").read_bytes() == (tmp_path / "there.csv").read_bytes()
     assert (tmp_path / "c.cache").is_file()
+
+
+def test_a_year_on_two_workers_is_the_year_of_one_process(local):
+    """The daylight coefficients by rounds and the direct sun by chunks, shades closed
+    too: the same bits on the cluster as in one process."""
+    from lbl_illum.daylight.weather import read_weather
+    from lbl_illum.distributed.annual import annual_solver
+    from lbl_illum.distributed.cluster import InProcess
+    from lbl_illum.engine.annual import annual_light, shaded_scene
+
+    _, dask = local
+    scene, P, N, options, recipe = office_job(point_samples=32)
+    weather = read_weather(OFFICE.parent / "weather" / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw")
+    closed = shaded_scene(scene, ["glazing"], 0.1)
+    years = []
+    for where in (InProcess(), dask):
+        open_ = annual_light(scene, P, N, weather, options, solve=annual_solver(where, recipe.path, PLAN))
+        shut = annual_light(closed, P, N, weather, options,
+                            solve=annual_solver(where, recipe.path, PLAN, shades=(["glazing"], 0.1)))
+        years.append((open_.illuminance, open_.direct_sun, shut.illuminance))
+    for a, b in zip(*years):
+        assert np.array_equal(a, b)
+    assert years[0][2].mean() < years[0][0].mean()
