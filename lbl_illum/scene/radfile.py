@@ -14,10 +14,11 @@ modifier, which the scene file maps to a material like an OBJ ``usemtl`` name:
   with :data:`SEGMENTS` sides around (a sphere: an icosphere of :data:`SPHERE_LEVEL`
   subdivisions), radii scaled so that the triangles' area equals the true surface's
   (tested to 10⁻⁶): a fixed sagitta of about 1 % of the radius, the exact area.  Radiance's
-  cylinders and cones have no end caps, and neither have these.
+  cylinders and cones have no end caps, and neither have these;
+* ``mesh``: through the OBJ it was compiled from, beside its ``.rtm`` (:func:`_mesh_source`).
 
 **Modifiers** (:func:`material_tables`): ``plastic``, ``metal``, ``glass``, ``mirror``,
-``trans``, ``light`` and ``glow`` definitions become tables of the scene file's
+``trans``, ``light``, ``glow``, ``illum`` and ``BRTDfunc`` definitions become tables of the scene file's
 ``[materials]`` form; patterns and textures that modify them are left out, and
 ``alias`` names are followed.  Everything else is skipped, each kind counted in one
 warning.  Lengths are in the file's unit, scaled to metres by the caller.
@@ -123,7 +124,10 @@ def read_rad(path: str | Path, where: str, root: Path | None = None, _stack: tup
         parts = body.split()
         words.extend(parts)
         lines.extend([number] * len(parts))
-    return out + _parse_words(words, lines, where)
+    out += _parse_words(words, lines, where)
+    if any(p.kind == "mesh" for p in out):
+        out = [q for p in out for q in (_mesh_source(p, path, root, where) if p.kind == "mesh" else [p])]
+    return out
 
 
 def _parse_words(words: list[str], lines: list[int], where: str) -> list[RadPrimitive]:
@@ -207,6 +211,43 @@ def _xform(argv: list[str], path: Path, root: Path, where: str, stack: tuple) ->
             raise InputError(f"{where}: !xform {name}: the file includes itself (recursive include)")
         prims += read_rad(found, f"{where}: {name}", root, stack)
     return xform_primitives(prims, options, where)
+
+
+#: The kind given to the triangles of a ``mesh`` read through its source OBJ
+#: (:func:`_mesh_source`): reals are 9 per triangle, corners in order.
+MESH_TRIANGLES = "mesh-triangles"
+
+
+def _mesh_source(p: RadPrimitive, path: Path, root: Path, where: str) -> list[RadPrimitive]:
+    """A ``mesh`` primitive (``mod mesh id  1+ file.rtm [xform args]  0  0``) read through
+    the Wavefront OBJ it was compiled from by ``obj2mesh``: ``file.obj`` beside
+    ``file.rtm`` (the compiled mesh itself is Radiance's binary format, not read here).
+    Its faces are triangulated as drawn (:func:`lbl_illum.scene.geometry.load_mesh_file`),
+    moved by the xform arguments as an ``instance`` is, and take, as Radiance's mesh does,
+    the primitive's modifier on every surface, or with modifier ``void`` the materials the
+    mesh stores: each face's ``usemtl`` name (else its group, else ``white``, the rule of
+    ``obj2rad``).  Without a source OBJ the mesh is left out, with a warning (it is then
+    counted among the skipped primitives).  Returns primitives of kind
+    :data:`MESH_TRIANGLES`, one per modifier and copy."""
+    from .geometry import load_mesh_file
+
+    label = f"{where}: line {p.line}: mesh '{p.name}'"
+    if not p.strings:
+        raise InputError(f"{label}: needs the mesh file as its first string argument")
+    options, rest = _xform_options(list(p.strings[1:]), label)
+    if rest:
+        raise InputError(f"{label}: unexpected argument '{rest[0]}' after the mesh file")
+    compiled = Path(p.strings[0])
+    source = next((f for f in (_find(str(compiled.with_suffix(s)), path, root) for s in (".obj", ".OBJ"))
+                   if f is not None), None)
+    if source is None:
+        return [p]                                   # skipped, and counted, by rad_surfaces
+    parts = load_mesh_file(source, f"{label}: {source.name}", 1.0)
+    prims = []
+    for part in parts:
+        modifier = p.modifier if p.modifier != "void" else (part.material or part.group or "white")
+        prims.append(RadPrimitive(modifier, MESH_TRIANGLES, p.name, [], part.vertices.reshape(-1), p.line))
+    return xform_primitives(prims, options, label) if options else prims
 
 
 #: xform options of one number (the rest take three, or none).
@@ -307,12 +348,15 @@ def xform_primitives(prims: list[RadPrimitive], options: list[tuple], where: str
         for p in prims:
             r = p.reals
             kind = p.kind
-            geometric = kind in SURFACE_TYPES or kind in ("source", "instance", "mesh")
+            geometric = kind in SURFACE_TYPES or kind in ("source", "instance", "mesh", MESH_TRIANGLES)
             if kind == "polygon":
                 pts = r.reshape(-1, 3) @ linear.T + m[:3, 3]
                 if mirror:
                     pts = pts[::-1]
                 r = pts.ravel()
+            elif kind == MESH_TRIANGLES:
+                tri = (r.reshape(-1, 3) @ linear.T + m[:3, 3]).reshape(-1, 3, 3)
+                r = (tri[:, ::-1] if mirror else tri).ravel()
             elif kind in ("sphere", "bubble") and len(r) == 4:
                 r = np.r_[linear @ r[:3] + m[:3, 3], r[3] * scale]
             elif kind in ("cylinder", "tube") and len(r) == 7:
@@ -388,6 +432,9 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
             names.append(p.name)
             owners.append(p.modifier)
             order.setdefault(p.modifier)
+        elif p.kind == MESH_TRIANGLES:
+            quadric_tris.append((p.modifier, p.reals.reshape(-1, 3, 3)))
+            order.setdefault(p.modifier)
         elif p.kind in _REAL_COUNTS:
             if len(p.reals) not in _REAL_COUNTS[p.kind]:
                 raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': needs {_REAL_COUNTS[p.kind][0]} "
@@ -403,8 +450,10 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
             skipped[p.kind] = skipped.get(p.kind, 0) + 1
     if warnings is not None and skipped:
         what = ", ".join(f"{count} '{kind}'" for kind, count in skipped.items())
+        hint = "; a mesh is read through the OBJ it was compiled from, NAME.obj beside NAME.rtm" \
+            if "mesh" in skipped else ""
         warnings.append(f"{where}: skipped {what} {'primitive' if sum(skipped.values()) == 1 else 'primitives'} "
-                        f"(read: {', '.join(SURFACE_TYPES)})")
+                        f"(read: {', '.join(SURFACE_TYPES)}, mesh{hint})")
     per_modifier: dict[str, list[np.ndarray]] = {m: [] for m in order}
     if coords:
         sizes = np.array([len(v) for v in coords])

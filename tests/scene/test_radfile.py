@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -202,7 +204,63 @@ def test_other_primitives_are_counted_in_one_warning(tmp_path):
     warnings = []
     read_rad_surfaces(path, "room.rad", 1.0, warnings)
     assert warnings == ["room.rad: skipped 1 'mesh', 1 'instance' primitives (read: polygon, sphere, bubble, "
-                        "cylinder, tube, cone, cup, ring)"]
+                        "cylinder, tube, cone, cup, ring, mesh; a mesh is read through the OBJ it was compiled from, "
+                        "NAME.obj beside NAME.rtm)"]
+
+
+MESH_ROOM = """void plastic Floor
+0
+0
+5 .3 .3 .3 0 0
+void plastic Wall
+0
+0
+5 .5 .5 .5 0 0
+void metal Trim
+0
+0
+5 .9 .6 .2 .8 .05
+void mesh chair
+5 chair.rtm -t 10 0 0
+0
+0
+Wall mesh chair2
+6 chair.rtm -mx -t 20 0 0
+0
+0
+"""
+
+
+def test_mesh_is_read_through_its_source_obj(tmp_path):
+    """``mod mesh id  1+ file.rtm [xform args]``: the faces of file.obj beside it (the
+    room corner: floor 2, wall 2 as one quad, trim 0.5 in units²), moved as an instance;
+    with ``void`` each face takes its usemtl name as modifier (obj2mesh's stored
+    materials), otherwise the given modifier on every face (Radiance's mesh); a mirror
+    keeps every triangle facing the side it faced."""
+    import shutil
+
+    shutil.copy(Path(__file__).resolve().parents[1] / "data" / "scene" / "room_corner.obj", tmp_path / "chair.obj")
+    _write(tmp_path, "room.rad", MESH_ROOM)
+    _write(tmp_path, "scene.toml", '[[geometry]]\nfile = "room.rad"\n[sky]\ntype = "uniform"\n'
+                                   'horizontal_illuminance = 1000\n')
+    scene = load_scene(tmp_path / "scene.toml")
+    assert scene.warnings == []
+    tri = scene.triangles
+    names = [m.name for m in scene.materials]
+    area = {n: tri.areas[tri.material == i].sum() for i, n in enumerate(names)}
+    assert area == pytest.approx({"Floor": 2.0, "Wall": 2.0 + 4.5, "Trim": 0.5})
+    assert scene.materials[names.index("Trim")].kind == "metal"
+    x = tri.vertices[:, :, 0]
+    first, second = x.max(axis=1) <= 12.0, x.min(axis=1) >= 18.0
+    assert (first | second).all() and first.sum() == 5 and second.sum() == 5
+    assert (tri.material[second] == names.index("Wall")).all()
+    # the mirror image (in x) of the floor still faces up, of the wall (in the xz plane) still +y
+    n = tri.normals
+    floor2 = second & (np.abs(tri.vertices[:, :, 2]).max(axis=1) < 1e-12)
+    assert floor2.sum() == 2 and np.allclose(n[floor2], [0, 0, 1])
+    np.testing.assert_allclose(n[first & (tri.material == names.index("Wall"))], [[0, 1, 0]] * 2, atol=1e-12)
+    np.testing.assert_allclose(n[second & (np.abs(tri.vertices[:, :, 1]).max(axis=1) < 1e-12)], [[0, 1, 0]] * 2,
+                               atol=1e-12)
 
 
 @pytest.mark.parametrize("spec,warned", [(0.0, False), (0.04, True)])
