@@ -23,6 +23,44 @@ from numba import njit
 
 __all__ = ["PARALLEL_MIN", "RowKernel", "nogil_kernel", "in_threads"]
 
+
+def _skip_blas_probe() -> None:
+    """Import numba's numpy functions (:mod:`numba.np.arraymath`, which the first kernel
+    compiled or loaded from disk imports) without importing SciPy.
+
+    That module asks at import whether BLAS is there by importing
+    ``scipy.linalg.cython_blas``: 0.2 s of every run (SciPy's array-API layer clones
+    numpy, which imports ``numpy.f2py`` and ``numpy.testing``), for functions such as
+    ``np.dot`` that no kernel here calls.  Here it is answered by whether SciPy is
+    installed; a kernel that does call linear algebra still imports SciPy when it is
+    compiled (:func:`numba.np.linalg.ensure_blas`).  With another layout of numba than
+    the one expected, nothing is changed."""
+    import importlib.util
+    import sys
+
+    if "numba.np.arraymath" in sys.modules:
+        return
+    try:
+        from numba.np import linalg
+        ensure_blas = linalg.ensure_blas
+    except (ImportError, AttributeError):
+        return
+
+    def scipy_installed():
+        if importlib.util.find_spec("scipy") is None:
+            raise ImportError("scipy is required for linear algebra")
+
+    linalg.ensure_blas = scipy_installed
+    try:
+        from numba.np import arraymath
+    finally:
+        linalg.ensure_blas = ensure_blas
+    if getattr(arraymath, "ensure_blas", None) is scipy_installed:
+        arraymath.ensure_blas = ensure_blas
+
+
+_skip_blas_probe()
+
 #: Items (rays, queries) from which a kernel runs on every core.
 PARALLEL_MIN = 100_000
 #: Ranges per thread a :class:`RowKernel` call is cut into (rows of unequal cost balance out).
@@ -95,3 +133,137 @@ def kernels_on_disk() -> bool:
         return all(os.path.exists(k._cache._cache_file._index_path) for k in kernels)
     except AttributeError:
         return True
+
+
+# -- the first run: kernels compiled on two cores ----------------------------------------------
+
+#: The kernels of every illuminance run (``module:name`` in this package) with the argument
+#: types the engine calls them with, in two parts of about equal compile time: the first
+#: compiled by the run's own process, the second meanwhile by a second one
+#: (:func:`start_first_run`), which also starts Python and numba (≈ 1 s).  Compile times
+#: one by one on the 2-core machine of docs/performance (s): lookup 2.2, layout 1.1,
+#: coverage 0.7, directions 0.3, plane hits 0.3 | portal irradiance 1.0, gradients 0.65,
+#: radix sort 0.6, record keys 0.4, query keys 0.3, insertion 0.3, the rest 0.1–0.25 each.
+#: A kernel missing here, or called with other types, is compiled when first called, as
+#: any other (tests/engine/test_compiled.py checks the README job's calls against this).
+FIRST_RUN = (
+    (("hemisphere:_stratified_kernel", "(float64[:, ::1], float64[:, ::1], float64[:, ::1], int64, int64, "
+      "float64[:, :, ::1])"),
+     ("raycast:_plane_hits", "(float64[:, ::1], float64[:, ::1], float64[::1], int32[::1], int64[::1], "
+      "float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1])"),
+     ("octree:_covered_kernel", "(float64[:, ::1], float64[:, ::1], uint8[::1], float64, bool, float32[:, :, ::1], "
+      "uint32[::1], int32[::1], float64[:, ::1], float32[:, ::1], float32[:, :, ::1], int64[::1], bool[::1])"),
+     ("octree:_layout", "(int64[::1], int64, float64[:, ::1], float32[:, ::1], float32[::1], uint8[::1], float64)"),
+     ("octree:_lookup_kernel", "(float64[:, ::1], float64[:, ::1], uint8[::1], int64[::1], int64, float64, bool, "
+      "bool, bool, float32[:, :, ::1], uint32[::1], int32[::1], float64[:, ::1], float32[:, ::1], "
+      "float32[:, :, ::1], int64[::1], float64, float64[:, ::1], float64[::1], int32[::1], int32[:, ::1], "
+      "float64[:, ::1])")),
+    (("octree:insert_records", "(int64, int64, float64[:, ::1], float32[::1], float64, int32[::1], "
+      "float64[:, ::1], float64[::1], int32[:, ::1], int64)"),
+     ("octree:_record_keys", "(int64, int64, int32[::1], int32[:, ::1], float64[:, ::1], float64[::1], "
+      "float64[:, ::1])"),
+     ("octree:_radix_order", "(uint64[::1],)"),
+     ("octree:_query_keys", "(float64[:, ::1], float64[::1], float64)"),
+     ("placement:_distance_bands_kernel", "(float64[:, ::1], float64[::1], float64[::1], float64, int64[::1])"),
+     ("placement:_cell_keys_kernel", "(float64[:, ::1], float64[:, ::1], int64[::1], float64, int64[::1], "
+      "float64[::1])"),
+     ("placement:_nearest_per_key", "(int64[::1], float64[::1])"),
+     ("integrator:_compact", "(bool[::1], int64[::1], float64[:, ::1], float64[:, ::1], int64[::1])"),
+     ("lambert:_portal_kernel", "(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], "
+      "float64[:, :, ::1], float64[::1], float64[:, ::1], float64[:, ::1])"),
+     ("integrator:_add_hit_light", "(int32[::1], float32[:, ::1], float64[:, ::1], float64[:, ::1], int32[::1], "
+      "float32[::1], float64[:, ::1])"),
+     ("gradients:_gradients_kernel", "(float64[:, ::1], float64[:, :, :, ::1], float64[:, :, :, ::1], "
+      "float64[:, :, ::1], float64[:, :, ::1], float64[:, :, ::1])")),
+)
+#: Longest wait [s] for the second process; past it the run compiles what it still lacks.
+HELPER_TIMEOUT = 300.0
+_HELPER: list = []
+_STARTED: list = []
+
+
+def _dispatcher(name: str):
+    """The numba dispatcher of ``module:name`` (a :class:`RowKernel`'s kernel)."""
+    import importlib
+
+    module, attr = name.split(":")
+    kernel = getattr(importlib.import_module(f"{__package__}.{module}"), attr)
+    return kernel.kernel if isinstance(kernel, RowKernel) else kernel
+
+
+def _on_disk(dispatcher) -> bool:
+    """Whether numba's disk cache has an index for ``dispatcher`` (True when numba's
+    layout is not the one expected: then nothing is compiled ahead)."""
+    import os
+
+    try:
+        return os.path.exists(dispatcher._cache._cache_file._index_path)
+    except AttributeError:
+        return True
+
+
+def compile_part(part: int) -> None:
+    """Compile the kernels of ``FIRST_RUN[part]`` (each found in numba's disk cache, or
+    compiled and written there)."""
+    for name, signature in FIRST_RUN[part]:
+        _dispatcher(name).compile(signature)
+
+
+def start_first_run() -> None:
+    """On a first run (the second part of :data:`FIRST_RUN` not in numba's disk cache),
+    start compiling that part in a second Python process; :func:`finish_first_run`
+    compiles the first part here and waits for it.  Compiling holds the GIL, so one
+    process compiles on one core: this halves the 9 s of compiling of the README job's
+    first run on 2 cores.  Nothing on one core, when numba's JIT is disabled, or when
+    the kernels are on disk (every later run)."""
+    import os
+    import subprocess
+    import sys
+
+    if _STARTED or numba.config.DISABLE_JIT or (os.cpu_count() or 1) < 2 or not sys.executable:
+        return
+    _STARTED.append(True)
+    if all(_on_disk(_dispatcher(name)) for name, _ in FIRST_RUN[1]):
+        return
+    env = dict(os.environ)
+    if numba.config.CACHE_DIR:
+        env["NUMBA_CACHE_DIR"] = numba.config.CACHE_DIR
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    try:
+        helper = subprocess.Popen([sys.executable, "-c", f"from {__name__} import compile_part; compile_part(1)"],
+                                  env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL)
+    except OSError:
+        return
+    _HELPER.append(helper)
+    import atexit
+
+    atexit.register(_stop_helper)
+
+
+def _stop_helper() -> None:
+    """End the second process if it still runs (the calculation never started)."""
+    while _HELPER:
+        helper = _HELPER.pop()
+        if helper.poll() is None:
+            helper.kill()
+            helper.wait()
+
+
+def finish_first_run() -> None:
+    """When :func:`start_first_run` started a second process: compile the first part of
+    :data:`FIRST_RUN` here, then wait for the second part (after :data:`HELPER_TIMEOUT`
+    the process is stopped and what it has not compiled is compiled when first called).
+    Does nothing otherwise."""
+    import subprocess
+
+    if not _HELPER:
+        return
+    try:
+        compile_part(0)
+        _HELPER[0].wait(timeout=HELPER_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        _stop_helper()

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .compiled import start_first_run
 from .direct import DirectLight
 from .portals import PortalSet, build_portals
 from .raycast import Tracer
@@ -87,6 +88,7 @@ class LightingContext:
     @classmethod
     def of(cls, scene: Scene) -> "LightingContext":
         """The context of ``scene``: its tracer, direct light and portals, built once."""
+        start_first_run()       # on a first run, half the kernels compile meanwhile in another process
         materials: MaterialTable = scene.material_table
         tracer = Tracer(scene.triangles, materials.kind, materials.transmittance)
         direct = DirectLight(tracer, materials, scene.sun, scene.luminaires)

@@ -54,6 +54,7 @@ import numpy as np
 from numba import njit
 
 from .cache import IrradianceCache, LevelRecords
+from .compiled import finish_first_run
 from .context import LightingContext
 from .fingerprint import record_settings, scene_fingerprint
 from .gradients import irradiance_gradients, limit_gradients
@@ -786,6 +787,7 @@ class Integrator:
         are answered later from the complete record set (:meth:`answer`).
         """
         t0 = time.perf_counter()
+        finish_first_run()      # a first run's kernels, compiled on two cores
         rays_before = self.tracer.rays_traced
         points = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
         normals = np.asarray(normals, np.float64).reshape(-1, 3)

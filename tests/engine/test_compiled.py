@@ -1,3 +1,6 @@
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 from numba import prange
@@ -36,3 +39,49 @@ def test_a_row_kernel_gives_the_same_rows_whole_or_cut_over_threads(monkeypatch,
 def test_a_row_kernel_is_compiled_once_without_the_gil():
     kernel = RowKernel(_scaled_rows, rows=(0, 2, 3))
     assert kernel.kernel.targetoptions.get("nogil") and not kernel.kernel.targetoptions.get("parallel")
+
+
+def test_the_first_run_kernels_are_declared_with_the_types_a_run_calls_them_with(office_cache):
+    """compiled.FIRST_RUN names each kernel the README job compiles and the argument types
+    the engine passes: a kernel compiled ahead with other types would be compiled again."""
+    from numba.core import sigutils
+
+    for part in compiled.FIRST_RUN:
+        for name, signature in part:
+            kernel = compiled._dispatcher(name)
+            declared = tuple(sigutils.normalize_signature(signature)[0])
+            called = [tuple(s) for s in kernel.signatures]
+            assert called in ([], [declared]), name
+    assert compiled._dispatcher("octree:_lookup_kernel").signatures      # the run did call them
+
+
+def test_a_first_run_compiles_half_the_kernels_in_a_second_process(monkeypatch):
+    calls = []
+
+    class Helper:
+        def __init__(self, command, env, **kwargs):
+            calls.append(("start", command, env["PYTHONPATH"]))
+
+        def wait(self, timeout=None):
+            calls.append(("wait", timeout))
+
+        def poll(self):
+            return 0
+
+    monkeypatch.setattr("subprocess.Popen", Helper)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(compiled, "compile_part", lambda part: calls.append(("compile", part)))
+    monkeypatch.setattr(compiled, "_STARTED", [])
+    monkeypatch.setattr(compiled, "_HELPER", [])
+    monkeypatch.setattr(compiled, "_on_disk", lambda kernel: True)
+    compiled.start_first_run()                        # every kernel on disk: nothing to do
+    compiled.finish_first_run()
+    assert calls == []
+    monkeypatch.setattr(compiled, "_STARTED", [])
+    monkeypatch.setattr(compiled, "_on_disk", lambda kernel: False)
+    compiled.start_first_run()
+    compiled.start_first_run()                        # once a process
+    assert len(calls) == 1 and "compile_part(1)" in calls[0][1][-1]
+    assert calls[0][2].split(os.pathsep)[0] == str(Path(compiled.__file__).parents[2])
+    compiled.finish_first_run()
+    assert calls[1:] == [("compile", 0), ("wait", compiled.HELPER_TIMEOUT)] and not compiled._HELPER
