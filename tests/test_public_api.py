@@ -19,7 +19,7 @@ except ModuleNotFoundError:          # Python 3.10
 import lbl_illum
 
 ROOT = Path(__file__).resolve().parents[1]
-LAYERS = ("scene", "daylight", "engine", "io", "workplane", "viz", "glare")
+LAYERS = ("scene", "daylight", "engine", "io", "workplane", "viz", "glare", "distributed")
 #: Shared top-level modules whose ``__all__`` is public.
 SHARED_PUBLIC = ("options", "photometry", "errors", "optional")
 

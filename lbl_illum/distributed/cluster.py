@@ -19,7 +19,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import logging
-from functools import lru_cache
+import os
 from pathlib import Path
 
 from ..errors import InputError
@@ -35,11 +35,11 @@ WORKER_SECONDS = 10.0
 START_SECONDS = 60.0
 
 
-@lru_cache(maxsize=1)
 def project_identity() -> str:
     """``"VERSION+DIGEST"``: the project's version and the first 12 hex digits of the
     SHA-256 of its Python source (every ``.py`` file of the package, by relative path),
-    so that two installs of one version with different code are told apart."""
+    so that two installs of one version with different code are told apart.  Read afresh
+    at each call (a few milliseconds): the driver and the workers read it at the same time."""
     from .._version import __version__
 
     root = Path(__file__).resolve().parents[1]
@@ -88,7 +88,9 @@ class InProcess:
 
 class DaskCluster:
     """A Dask client, checked (module text).  ``address``: a scheduler to connect to;
-    ``workers``: the size of a LocalCluster to start here instead (loopback only)."""
+    ``workers``: the size of a LocalCluster to start here instead (loopback only; each
+    worker process runs one task at a time with the machine's cores / ``workers`` threads,
+    ``LBL_ILLUM_THREADS`` and ``NUMBA_NUM_THREADS``)."""
 
     def __init__(self, address: str | None = None, workers: int | None = None):
         check_optional("distributed", "--workers/--scheduler")
@@ -96,9 +98,13 @@ class DaskCluster:
 
         self.cluster = None
         if address is None:
+            # the machine's cores shared among the workers: each runs its tasks one at a time
+            # (Dask thread) with cores/N threads for its ray casting and lookups
+            cores = str(max(1, (os.cpu_count() or 1) // int(workers)))
             self.cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                                         host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR,
-                                        death_timeout=START_SECONDS)
+                                        death_timeout=START_SECONDS,
+                                        env={"LBL_ILLUM_THREADS": cores, "NUMBA_NUM_THREADS": cores})
             self.client = Client(self.cluster, timeout=START_SECONDS)
             self.name = f"a local cluster of {workers} worker{'s' if workers != 1 else ''}"
         else:

@@ -5,7 +5,7 @@ a header and the record arrays of every level), never a live cache: the driver s
 those arrays to every worker, each task builds its cache from them
 (:func:`~lbl_illum.io.cachefile.cache_from_data`) and returns only the records it added
 (:func:`record_delta`), and the driver merges the deltas into the set in chunk order
-(:func:`merge_round`, :func:`~lbl_illum.io.cachefile.merge_cache_data`: a record made
+(:func:`merge_round`, :func:`~lbl_illum.io.cachefile.merge_cache_parts`: a record made
 twice, at the same position and normal, is kept once).  Because every task of a round,
 on any worker or in the driver's own process, starts from the same arrays and the merge
 order is the chunks' order, the next round's set does not depend on who ran what.
@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..engine.cache import IrradianceCache
-from ..io.cachefile import CacheData, cache_data, merge_cache_data, save_cache_data
+from ..io.cachefile import CacheData, cache_data, merge_cache_parts, save_cache_data
 
-__all__ = ["record_delta", "merge_round", "file_contents", "save_round"]
+__all__ = ["record_delta", "record_set", "merge_round", "file_contents", "save_round"]
 
 
 def record_delta(cache: IrradianceCache, base: CacheData, coefficients=None) -> CacheData:
@@ -49,11 +49,10 @@ def record_delta(cache: IrradianceCache, base: CacheData, coefficients=None) -> 
 
 
 def merge_round(base: CacheData, deltas) -> CacheData:
-    """``base`` with the records of each delta added, in the order given (the chunks')."""
-    merged = base
-    for delta in deltas:
-        merged, _ = merge_cache_data(merged, delta)
-    return merged
+    """``base`` with the records of each delta added, in the order given (the chunks'):
+    :func:`~lbl_illum.io.cachefile.merge_cache_parts`, which is :func:`merge_cache_data`
+    of each in turn done in one pass."""
+    return merge_cache_parts(base, deltas)
 
 
 def file_contents(data: CacheData) -> CacheData:
@@ -61,9 +60,9 @@ def file_contents(data: CacheData) -> CacheData:
     return CacheData(data.header, {name: arr for name, arr in data.arrays.items() if not name.endswith("_C")})
 
 
-def empty_set(cache: IrradianceCache, coefficients=None) -> CacheData:
-    """The record set of ``cache`` (:func:`cache_data`), with ``coefficients``' arrays of
-    its records when given (empty for a new cache)."""
+def record_set(cache: IrradianceCache, coefficients=None) -> CacheData:
+    """The record set that travels for ``cache`` (:func:`cache_data`: a file's contents),
+    with ``coefficients``' arrays of its records when given (zeros where it has none)."""
     data = cache_data(cache)
     if coefficients is not None:
         for k, n in enumerate(data.record_counts):

@@ -47,7 +47,7 @@ import numpy as np
 from ..engine.integrator import IlluminanceResult, Integrator, RunStats
 from ..io.cachefile import CacheFile, record_settings, sigterm_as_interrupt
 from .plan import ANSWER_WEIGHT, CHUNK_POINTS, ROUND_CHUNKS, Decomposition
-from .records import empty_set, merge_round, save_round
+from .records import record_set, merge_round, save_round
 from .worker import SceneRecipe, answer_chunk, solve_chunk
 
 __all__ = ["Decomposition", "RoundCost", "RunCosts", "solve_points", "CHUNK_POINTS", "ROUND_CHUNKS"]
@@ -148,7 +148,7 @@ def solve_points(cluster, recipe: SceneRecipe, integ: Integrator, points, normal
 
         dc = CoefficientRecords(Integrator(integ.scene, opts, context=integ.context), coefficients["mf"],
                                 coefficients["suns"])
-    base = empty_set(start, dc)
+    base = record_set(start, dc)
     stats.min_spacing, stats.max_spacing = run_spacing(integ, points, normals, spacing)
     spacing = (stats.min_spacing, stats.max_spacing)
     roi = (points.min(axis=0), points.max(axis=0)) if len(points) else (np.zeros(3), np.zeros(3))

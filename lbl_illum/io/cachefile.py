@@ -34,7 +34,7 @@ from .files import atomic_write_bytes
 from .locking import file_lock
 
 __all__ = ["CacheData", "CacheFile", "attach_cache_file", "CACHE_FORMAT_VERSION", "Terminated", "cache_data", "cache_from_data",
-           "save_cache", "save_cache_data", "load_cache", "read_cache_file", "write_cache_file", "merge_cache_data",
+           "save_cache", "save_cache_data", "load_cache", "merge_cache_parts", "read_cache_file", "write_cache_file", "merge_cache_data",
            "record_settings", "settings_differences", "sigterm_as_interrupt", "deferred_interrupts"]
 
 CACHE_FORMAT = "lbl_illum irradiance cache"
@@ -433,6 +433,48 @@ def merge_cache_data(base: CacheData, other: CacheData) -> tuple[CacheData, int]
     header = {**base.header, "levels": levels}
     header.pop("checksum", None)
     return CacheData(header, arrays), added
+
+
+def merge_cache_parts(base: CacheData, parts) -> CacheData:
+    """``base`` merged with each of ``parts`` in turn (:func:`merge_cache_data`), the same
+    records in the same order and the same root cubes (a record twice within one part is
+    kept once too), in one pass: the keys of all the
+    parts' records are looked up in ``base`` once and among themselves once, and every
+    array is concatenated once (merging k parts into n records one by one costs k times
+    the sort of n keys and k copies of the arrays)."""
+    parts = list(parts)
+    for part in parts:
+        if not base.compatible(part):
+            raise InputError(_mismatch(base.header.get("settings"), part.header.get("settings")))
+    if not parts:
+        return base
+    arrays, levels = {}, []
+    for k, lb in enumerate(base.header["levels"]):
+        a = base.level(k)
+        own = [part.level(k) for part in parts]
+        P = np.concatenate([b["P"] for b in own])
+        keys = _level_keys(P, np.concatenate([b["N"] for b in own])) if len(P) else np.zeros(0, np.dtype((np.void, 36)))
+        new = ~np.isin(keys, _level_keys(a["P"], a["N"])) if len(keys) else np.zeros(0, bool)
+        if new.any():                   # a record made by two parts is kept once, the first's
+            _, first = np.unique(keys, return_index=True)
+            once = np.zeros(len(keys), bool)
+            once[first] = True
+            new &= once
+        for short in a:
+            arrays[f"L{k}_{short}"] = np.concatenate([a[short], *(b[short] for b in own)])[
+                np.concatenate([np.ones(len(a[short]), bool), new])]
+        center, half = lb["center"], lb["half"]
+        lo = 0
+        for part, b in zip(parts, own):
+            hi = lo + len(b["P"])
+            if new[lo:hi].any():
+                info = part.header["levels"][k]
+                center, half = _union_cube(center, half, info["center"], info["half"])
+            lo = hi
+        levels.append({**lb, "records": int(len(arrays[f"L{k}_P"])), "center": center, "half": half})
+    header = {**base.header, "levels": levels}
+    header.pop("checksum", None)
+    return CacheData(header, arrays)
 
 
 # -- what the fingerprint covers, readably ------------------------------------------------

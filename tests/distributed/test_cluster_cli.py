@@ -70,3 +70,14 @@ def test_render_and_daylight_factor_take_the_cluster_options(capsys):
             main([command, "--help"])
         text = " ".join(capsys.readouterr().out.split())
         assert "--workers N" in text and "--scheduler ADDRESS" in text and "(default 2048)" in text
+
+
+def test_user_guide_states_the_cluster_defaults_of_the_code():
+    import re
+
+    from lbl_illum.distributed.plan import CHUNK_POINTS, ROUND_CHUNKS
+
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "user-guide.md").read_text()
+    for option, value in (("--chunk-size", CHUNK_POINTS), ("--round-chunks", ROUND_CHUNKS)):
+        row = re.search(r"^\| `" + re.escape(option) + r"[ `][^|]*\| ([^|]+) \|", guide, flags=re.M)
+        assert row and row.group(1).strip() == str(value), (option, row and row.group(1))
