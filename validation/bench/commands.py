@@ -13,8 +13,13 @@ is taken from outside, start-up included:
   loading kernels and the scene, writing the output);
 * the render of docs/rendering.md (512 × 352 pixels, default preset), warm.
 
-Usage: ``python validation/bench/commands.py [--repeat N] [--out DIR]`` (``--out`` writes
-``commands.json``).  Nothing here is asserted: the figures go to the docs by hand, with
+Python's bytecode cache is on, in a temporary folder (``PYTHONPYCACHEPREFIX``), as in
+an installed copy, even where ``PYTHONDONTWRITEBYTECODE`` is set (then every command
+compiles the package's 70 modules again, about 0.1 s more each); ``--no-bytecode-cache``
+leaves the environment as it is.
+
+Usage: ``python validation/bench/commands.py [--repeat N] [--out DIR] [--no-bytecode-cache]``
+(``--out`` writes ``commands.json``).  Nothing here is asserted: the figures go to the docs by hand, with
 the machine they were taken on.
 """
 
@@ -31,6 +36,11 @@ import tempfile
 import time
 from pathlib import Path
 
+try:
+    import resource
+except ImportError:             # Windows: wall seconds only
+    resource = None
+
 ROOT = Path(__file__).resolve().parents[2]
 OFFICE = ["examples/office/scene.toml", "--points", "examples/office/grid.pts"]
 VIEW = "--view=-vtv -vp 2 5.5 1.5 -vd 0 -1 -0.1 -vh 80 -vv 60"
@@ -41,12 +51,21 @@ def _command() -> list[str]:
     return [script] if script else [sys.executable, "-m", "lbl_illum"]
 
 
+#: CPU seconds (user + system, the command's processes) of each timed run, by wall seconds.
+CPU: dict[float, float] = {}
+
+
 def timed(args: list[str], env: dict | None = None) -> float:
-    """Wall seconds of one command (it must succeed)."""
+    """Wall seconds of one command (it must succeed); its CPU seconds go to :data:`CPU`."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN) if resource else None
     t0 = time.perf_counter()
     subprocess.run(_command() + args, cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL,
                    stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    if resource:
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        CPU[wall] = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    return wall
 
 
 def best(args: list[str], repeat: int, env: dict | None = None) -> tuple[float, list[float]]:
@@ -58,13 +77,19 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=3, help="warm runs per command, best taken (default 3)")
     parser.add_argument("--out", type=Path, help="folder for commands.json")
+    parser.add_argument("--no-bytecode-cache", action="store_true",
+                        help="keep the environment's PYTHONDONTWRITEBYTECODE (default: a bytecode cache in a temporary folder)")
     args = parser.parse_args(argv)
     out_dir = Path(tempfile.mkdtemp(prefix="lbl-illum-bench-"))
+    base = dict(os.environ)
+    if not args.no_bytecode_cache:
+        base.pop("PYTHONDONTWRITEBYTECODE", None)
+        base["PYTHONPYCACHEPREFIX"] = str(out_dir / "pycache")
     rows = {}
     try:
-        rows["help"] = best(["--help"], 5)
+        rows["help"] = best(["--help"], 5, base)
         # first run: numba's kernels and the geometry cache not on disk yet
-        cold = dict(os.environ, NUMBA_CACHE_DIR=str(out_dir / "numba"), LBL_ILLUM_CACHE_DIR=str(out_dir / "geometry"))
+        cold = dict(base, NUMBA_CACHE_DIR=str(out_dir / "numba"), LBL_ILLUM_CACHE_DIR=str(out_dir / "geometry"))
         readme = ["illuminance", *OFFICE, "-o", str(out_dir / "results.csv")]
         rows["readme first run"] = (timed(readme, cold), [])
         rows["readme warm"] = best(readme, args.repeat, cold)
@@ -79,14 +104,18 @@ def main(argv=None) -> int:
                                    args.repeat, cold)
     finally:
         shutil.rmtree(out_dir, ignore_errors=True)
-    print(f"{'command':32s} {'seconds':>8s}   all runs")
+    print(f"{'command':32s} {'seconds':>8s} {'cpu':>6s}   all runs")
     for name, (seconds, runs) in rows.items():
-        print(f"{name:32s} {seconds:8.2f}   {' '.join(f'{t:.2f}' for t in runs)}")
+        cpu = f"{CPU[seconds]:6.2f}" if seconds in CPU else " " * 6
+        print(f"{name:32s} {seconds:8.2f} {cpu}   {' '.join(f'{t:.2f}' for t in runs)}")
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
         report = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
-                              "processor": platform.processor() or platform.machine()},
+                              "processor": platform.processor() or platform.machine(),
+                              "load": os.getloadavg() if hasattr(os, "getloadavg") else None},
+                  "bytecode_cache": not args.no_bytecode_cache and "PYTHONDONTWRITEBYTECODE" not in base,
                   "seconds": {name: seconds for name, (seconds, _) in rows.items()},
+                  "cpu_seconds": {name: CPU[seconds] for name, (seconds, _) in rows.items() if seconds in CPU},
                   "runs": {name: runs for name, (_, runs) in rows.items()}}
         (args.out / "commands.json").write_text(json.dumps(report, indent=2) + "\n")
     return 0
