@@ -1,4 +1,4 @@
-"""Photometric value of linear RGB light (DESIGN.md §2).
+"""Photometric value of linear RGB light (docs/design.md §2).
 
 Light is carried as linear RGB whose channels are photometric: a grey triple
 ``(L, L, L)`` has luminance ``L`` cd/m² and an irradiance triple ``(E, E, E)``

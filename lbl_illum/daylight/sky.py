@@ -1,4 +1,4 @@
-"""Sky luminance distributions (DESIGN.md §2), one class per model, with a registry.
+"""Sky luminance distributions (docs/design.md §2), one class per model, with a registry.
 
 Directions are unit vectors in the scene frame (+z up, +y north, +x east).  Above
 the horizon each model gives the sky luminance; below it every model gives the

@@ -1,7 +1,7 @@
 """Where the sun is, and what a weather file says about an hour: site, time, solar position,
 air mass, extraterrestrial irradiance and EPW weather files.
 
-Frames and units (DESIGN.md §2): altitude in degrees above the horizon, azimuth in degrees
+Frames and units (docs/design.md §2): altitude in degrees above the horizon, azimuth in degrees
 clockwise from north (east = 90°), latitude in degrees north, longitude in degrees **east**
 (west negative; Radiance's ``gensky`` and ``gendaylit`` take west positive), time zones in
 hours east of UTC (US Pacific standard time is −8), irradiance in W/m², illuminance in lux.

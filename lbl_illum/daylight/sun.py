@@ -1,4 +1,4 @@
-"""The sun: a distant disk source of solid angle 6.8e-5 sr (DESIGN.md §2).
+"""The sun: a distant disk source of solid angle 6.8e-5 sr (docs/design.md §2).
 
 Position by altitude (degrees above the horizon) and azimuth (degrees clockwise
 from north, east = 90°) in the scene frame (+z up, +y north, +x east), given or computed

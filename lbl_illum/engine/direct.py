@@ -1,6 +1,6 @@
 """Direct illuminance from the sun and from ``light`` surfaces, by shadow rays.
 
-* Sun (DESIGN.md §2): E = E_dn · max(0, N·s) · V, s the disk's centre and V the mean
+* Sun (docs/design.md §2): E = E_dn · max(0, N·s) · V, s the disk's centre and V the mean
   transmittance of shadow rays over the 6.8e-5 sr disk (0 behind an opaque surface, the
   product of τ(θ) over the panes of glass crossed, θ each pane's angle of incidence:
   :meth:`lbl_illum.scene.materials.MaterialTable.specular`): one ray at a hemisphere hit, a

@@ -1,4 +1,4 @@
-"""Wavefront irradiance-cache integrator (the paper's §3 and §3.4; DESIGN.md §3).
+"""Wavefront irradiance-cache integrator (the paper's §3 and §3.4; docs/design.md §3).
 
 Illuminance at a query point P with normal N is the direct part (sun and light
 surfaces, :mod:`lbl_illum.engine.direct`) plus the indirect part, interpolated from the

@@ -1,5 +1,5 @@
 """The path follower: rays through mirrors, glass and plastic's specular part to where
-they end (the paper's §2, ray casting; DESIGN.md §3, one batch per stage).
+they end (the paper's §2, ray casting; docs/design.md §3, one batch per stage).
 
 Hemisphere rays of records (grids) and camera rays (images) are followed by the same
 loop over depth, at most :data:`MAX_SPECULAR_DEPTH` specular interactions, every stage

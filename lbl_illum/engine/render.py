@@ -1,4 +1,4 @@
-"""Luminance images through the irradiance cache (the paper's §2 and §3; DESIGN.md §3).
+"""Luminance images through the irradiance cache (the paper's §2 and §3; docs/design.md §3).
 
 A pixel's value is the luminance [cd/m²] seen along its camera rays, averaged over
 ``pixel_samples`` jittered rays per pixel.  Each camera ray is followed by ray casting
@@ -33,7 +33,7 @@ in a mirror: the cache's §5 rule (a hemisphere ray that meets a light adds noth
 the direct step counted it) is about the *illuminance* at a diffuse point and is kept
 inside E; a camera ray is not part of any illuminance integral.
 
-**One batch per stage.**  All pixels × samples are traced at once (DESIGN.md §3):
+**One batch per stage.**  All pixels × samples are traced at once (docs/design.md §3):
 camera rays → specular continuations, depth by depth (at most
 ``MAX_SPECULAR_DEPTH`` = 8 interactions, as the integrator's hemisphere rays) → the
 diffuse hits of every path, which go to :meth:`Integrator.compute` together.  That one
@@ -89,7 +89,7 @@ window; :func:`lbl_illum.viz.falsecolor.default_maximum`).  Finding them costs o
 closest-hit query per camera ray, counted in ``stats.rays``.
 
 Units: lengths [m], luminance [cd/m²], illuminance [lux]; pixels are linear RGB with
-photometric channels (DESIGN.md §2), row 0 the top of the image (:mod:`lbl_illum.scene.views`).
+photometric channels (docs/design.md §2), row 0 the top of the image (:mod:`lbl_illum.scene.views`).
 """
 
 from __future__ import annotations
@@ -192,7 +192,7 @@ class RenderResult:
 
     @property
     def luminance(self) -> np.ndarray:
-        """(h, w) float32 photometric luminance [cd/m²] (Rec. 709 weights, DESIGN.md §2)."""
+        """(h, w) float32 photometric luminance [cd/m²] (Rec. 709 weights, docs/design.md §2)."""
         return luminance(self.rgb).astype(np.float32)
 
 

@@ -1,6 +1,6 @@
 """Record sizing: the radius R_i [m] of each new record, and for elliptical domains its
 shape, which with the accuracy a bound the domain a·R_i over which Eq. 5 interpolates
-the record (the paper's §3.2; DESIGN.md §1; docs/architecture.md, "Record domains" and
+the record (the paper's §3.2; docs/design.md §1; docs/architecture.md, "Record domains" and
 departures 2 and 3).
 
 **The split sphere.**  Eq. 3 bounds the change of E with position by the split sphere

@@ -1,7 +1,7 @@
 """Luminance images on disk: OpenEXR, Radiance HDR (RGBE), float TIFF, and an sRGB preview.
 
 Pixel values.  An image is a ``(height, width, 3)`` array of linear RGB whose channels
-are photometric (DESIGN.md §2, :mod:`lbl_illum.photometry`): a grey pixel ``(L, L, L)``
+are photometric (docs/design.md §2, :mod:`lbl_illum.photometry`): a grey pixel ``(L, L, L)``
 has luminance ``L`` cd/m², and any pixel's luminance is its Rec. 709 value
 ``Y = 0.2126 R + 0.7152 G + 0.0722 B``.  Row 0 is the top of the image, column 0 its
 left (:mod:`lbl_illum.scene.views`).

@@ -1,4 +1,4 @@
-"""Length units of scene files.  The engine works in metres (DESIGN.md §2)."""
+"""Length units of scene files.  The engine works in metres (docs/design.md §2)."""
 
 from __future__ import annotations
 

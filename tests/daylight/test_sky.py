@@ -1,4 +1,4 @@
-"""Sky models (DESIGN.md §2) and the Eq. 2 sampler under them, through the engine."""
+"""Sky models (docs/design.md §2) and the Eq. 2 sampler under them, through the engine."""
 
 import numpy as np
 import pytest

@@ -3,7 +3,7 @@
 Every reference here is computed independently of the engine's Lambert formula: the
 configuration factors of Howell's catalogue for rectangles and disks, Nusselt's point
 form for spheres and direct numerical integration over the emitter where no closed form
-is at hand.  Tolerance: 1 % per point (issue target), tighter where the engine's result
+is at hand.  Tolerance: 1 % per point (the project's target), tighter where the engine's result
 has no noise at all (nothing in the way).
 """
 
@@ -53,7 +53,7 @@ def _direct(geometry, points, normals, options=DIRECT_ONLY):
 
 @pytest.mark.parametrize("height", [0.2, 1.2, 60.0])
 def test_rectangle_emitter_every_sensor_matches_the_configuration_factor(height):
-    """A 1.2 × 0.6 m panel at 0.2 m (nearer than its size), 1.2 m (the issue's case) and
+    """A 1.2 × 0.6 m panel at 0.2 m (nearer than its size), 1.2 m (the specified case) and
     60 m (its triangles are point sources there) above upward sensors, nothing in the way:
     the closed form is the result, to 1e-6 near (1e-3 far, the point form's error)."""
     panel = {"shape": "rectangle", "origin": [-0.6, -0.3, height], "u": [1.2, 0, 0], "v": [0, 0.6, 0],
@@ -100,7 +100,7 @@ def test_disk_emitter_every_sensor_within_a_percent(height):
 
 @pytest.mark.parametrize("height", [0.3, 1.5])
 def test_sphere_emitter_every_sensor_matches_the_point_at_its_centre(height):
-    """The issue's sphere (r = 0.1 m, 1000 cd/m²) at 1.5 m, and one diameter above the floor
+    """The specified sphere (r = 0.1 m, 1000 cd/m²) at 1.5 m, and one diameter above the floor
     (centre at 0.3 m): E = π L (r/d)² cos θ_c (Nusselt) at every sensor, to 1e-6 (nothing is
     in the way, so no ray changes it).  Before: 28 % mean, 77 % worst per point."""
     r = 0.1

@@ -10,7 +10,7 @@ sends back, so between the planes E_floor = τ E_top + ρ ρ_f E_floor, i.e.
 
 (radiosity of two infinite parallel Lambertian planes; Modest, *Radiative Heat Transfer*,
 2013, ch. 5).  The planes here are 400 m across and 1 m apart: the view factor between
-them misses 1 − 1e-5.  Every sensor within 2 % (the issue's target).  The light
+them misses 1 − 1e-5.  Every sensor within 2 % (the project's target).  The light
 between the planes is uniform, so the records have no noise to speak of: what is left
 is the truncation of the series at 4 bounces (diffuse transmission counts as a bounce),
 (ρ ρ_f)² = 0.64 % (measured: 0.640 % with the floor, 6e-6 without, 0.642 % under the

@@ -1,5 +1,5 @@
 """The office-daylight study: DF on examples/office against Radiance's rtrace on the exported
-scene (issue 5 §5: within 3 % mean relative error, overcast and clear sky with sun), and
+scene (the project's criterion: within 3 % mean relative error, overcast and clear sky with sun), and
 gensky's horizon blend.
 
 The helpers are checked without Radiance; everything that runs Radiance skips when

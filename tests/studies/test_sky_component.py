@@ -1,5 +1,5 @@
 """The sky-component study: the tool's sky component through roof and façade openings
-against an independent integral over the opening (issue 5 §5: within 5 % at every sensor).
+against an independent integral over the opening (the project's criterion: within 5 % at every sensor).
 
 The reference integral is checked first against a closed form: for a sky of uniform
 luminance L the illuminance through a polygonal opening is L times the projected solid

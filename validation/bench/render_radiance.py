@@ -1,6 +1,6 @@
 """The office's luminance image by ``lbl-illum render`` and by Radiance's ``rpict``, against pure Monte Carlo.
 
-Issue 6 §5's acceptance benchmark: the office (``examples/office``: 4 × 6 × 3 m, one
+The renderer's acceptance benchmark: the office (``examples/office``: 4 × 6 × 3 m, one
 3 × 1.5 m window of constant-coefficient glazing, CIE overcast sky of 10,000 lux) is
 rendered at one stated view and resolution by both programs with matched settings, in
 one run, and
@@ -111,7 +111,7 @@ REFERENCE_PIXELS = 300
 REFERENCE_BOUNCES = 12
 #: Radiance's own pure Monte Carlo at the reference pixels (rtrace -aa 0).
 RADIANCE_MC = ["-ab", "13", "-aa", "0", "-ad", "16384", "-lr", "20", "-lw", "1e-9"]
-#: The target of issue 6 §5.
+#: The project's target for the renderer.
 TARGET_MEDIAN = 0.05
 #: rpict -ad values of the diagnostic ladder (with the low setting's -aa).
 DIAGNOSE_AD = (512, 2048)
@@ -679,7 +679,7 @@ def write_report(args, results: dict, rows, mask, pixels, seconds: float) -> Pat
                  caption=f"The office at {w} × {h} pixels, {results['pixels_compared']:,} diffuse pixels compared; "
                          f"Monte Carlo (MC) reference at {results['reference']['pixels']} of them.")
     report.text(
-        f"View `{results['view']}`, {w} × {h} pixels, 1 sample per pixel.  Targets (issue 6 §5): the median "
+        f"View `{results['view']}`, {w} × {h} pixels, 1 sample per pixel.  Targets: the median "
         f"relative luminance difference over diffuse pixels at most {TARGET_MEDIAN:.0%}, and our time lower.  "
         "rpict runs on one thread (it has no `-n`), so the speed target is judged on our 1-thread time; the "
         "2-thread time is the machine's normal use.  Times are wall seconds of the rendering alone (ours after a "

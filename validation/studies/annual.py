@@ -33,7 +33,7 @@ The bundled office (77 sensors) and the Oakland typical year (`examples/weather`
   pixel a source: sunlit surfaces too).
 * **Speed.**  The whole command as a user types it (full version).
 
-Criteria (the issue's): hourly mean error within 3 % of the point-in-time engine, direct
+Criteria (the project's): hourly mean error within 3 % of the point-in-time engine, direct
 sun within 1 %, sDA and ASE within 2 percentage points of the converged Radiance run.
 """
 

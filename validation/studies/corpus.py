@@ -15,7 +15,7 @@ kernel cache.  Its result is compared, sensor by sensor, with the case's converg
 reference (``validation/corpus_reference.py``: pure Monte Carlo over independent seeds,
 its standard error stated), which was cross-checked against Radiance where the file says so.
 
-Targets (the accuracy issue of the corpus): every preset's bias within ±1 % on every case;
+Targets (the project's accuracy targets for the corpus): every preset's bias within ±1 % on every case;
 the default preset's mean error at most 1.5 × the reference's own standard error + 0.5 %.
 """
 

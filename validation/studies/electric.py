@@ -38,7 +38,7 @@ And three more:
   -ad 2048``; the quick version ``-aa 0.15 -ad 512``), and each against the other's noise.
 
 Criteria: 5.2, 5.3 and the skylight every sensor within 1 % (2 % for the skylight, the
-issue's target); 5.4 and 5.8 the flux within 1 %; superposition within 3 % in the mean;
+the project's target); 5.4 and 5.8 the flux within 1 %; superposition within 3 % in the mean;
 the office within 3 % in the mean of the two programs.
 """
 

@@ -36,7 +36,7 @@ Four checks, each of a different part of the calculation:
   luminance, against the illuminance at the eye less its direct sunlight), and the disk's
   own share is reported beside it.
 
-Criteria (the issue's): DGP within 0.02 of evalglare on every image, E_v within 2 % of the
+Criteria (the project's): DGP within 0.02 of evalglare on every image, E_v within 2 % of the
 illuminance at the eye (without the sun's disk where it is seen); the solid angles summing to 2π and π within 1e-9; the hand-evaluated
 DGP within 0.01 and E_v and ω_s within the discretisation of the disc (2 %).
 """
@@ -68,8 +68,8 @@ from .report import Report, StudyContext, fmt, new_figure, pct
 TITLE = ("Glare: DGP, vertical illuminance and glare sources of 180° fisheyes against evalglare, "
          "a source evaluated by hand and the illuminance at the eye")
 
-DGP_BOUND = 0.02                # |DGP − evalglare's| on every image (the issue's target)
-EV_EYE_BOUND = 0.02             # |E_v(image) / E(eye) − 1| (the issue's target)
+DGP_BOUND = 0.02                # |DGP − evalglare's| on every image (the project's target)
+EV_EYE_BOUND = 0.02             # |E_v(image) / E(eye) − 1| (the project's target)
 SUM_BOUND = 1e-9                # |Σ ω − 2π|, |Σ ω_⊥ − π| over every pixel
 HAND_DGP_BOUND = 0.01           # |DGP(image) − DGP(hand)| of the synthetic source
 HAND_SHAPE_BOUND = 0.02         # |ω_s / ω_s(hand) − 1| and |E_v / E_v(hand) − 1|: the disc's outline

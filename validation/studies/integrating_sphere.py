@@ -32,7 +32,7 @@ Each bounce therefore multiplies the wall illuminance by q = ρ (1 − f):
 ``bounces = N`` in the engine is exactly E(N): level k's records hold the indirect
 irradiance after N − k further bounces, V_k = E_0 Σ_{j=1..N−k} q^j.
 
-**Ambient.**  At the bounce limit a hit contributes ρ/π · ``ambient`` (DESIGN.md §3,
+**Ambient.**  At the bounce limit a hit contributes ρ/π · ``ambient`` (docs/design.md §3,
 the paper's §3.4), so the deepest level holds q · A and the answer is
 E(N) + q^{N+1} A: ``ambient = E_∞`` gives E_∞ at any N, and a guess A gives the bias
 q^{N+1} (A − E_∞).

@@ -7,7 +7,7 @@ Radiance 6's ``rtrace -I`` compute the illuminance at the 77 workplane sensors o
 (:func:`lbl_illum.io.radiance.export_radiance`), in which the sky is our sky model written in
 Radiance's ``.cal`` language (``lbl_sky.cal``), the glass the Radiance material with the same
 optics, and the sun a ``light`` source of the same solid angle and normal illuminance.  Two
-skies (issue 5 §5):
+skies (the project's criteria):
 
 * **overcast**: ``examples/office/scene.toml``, the traditional CIE overcast sky of
   E_h = 10,000 lux, ground reflectance 0.2, glazing ``model = "constant"`` (τ 0.6; exported
@@ -27,7 +27,7 @@ rays jittered over the sun's disk, as ours are).  Every sensor is traced ``repea
 (:data:`FULL`, :data:`QUICK`), in two ``rtrace`` processes of one thread each
 (:func:`rtrace_repeats`); the mean over the repeats is the reference and their spread
 / √repeats its standard error.  rtrace seeds its random numbers from the clock, so two
-runs of the study differ within these errors.  The criterion of issue 5: mean over the sensors of
+runs of the study differ within these errors.  The project's criterion: mean over the sensors of
 |E_tool / E_Radiance − 1| ≤ 3 %.
 
 **gensky.**  Radiance's own CIE overcast sky, ``gensky -c -B E_h/179 -g ρ_g`` (same zenith
@@ -71,7 +71,7 @@ from .report import Report, StudyContext, error_summary, fmt, new_figure, pct
 
 TITLE = "Office daylight factor against Radiance, and gensky's horizon blend"
 
-TOLERANCE = 0.03                                    # issue 5 §5: mean relative error
+TOLERANCE = 0.03                                    # the project's criterion: mean relative error
 CASES = {"overcast": "scene.toml", "clear": "office_clear_sky.toml"}
 #: the rtrace options besides -ad (pure Monte Carlo; see the module docstring)
 RTRACE = ["-ab", "9", "-aa", "0", "-as", "0", "-lw", "1e-5", "-dj", "1"]
@@ -290,7 +290,7 @@ def _write(rep: Report, res: dict, plan: dict, n: int) -> None:
     over, clear = res["cases"]["overcast"], res["cases"]["clear"]
     opts = over["options"]
     rep.text(f"""
-Issue 5 asks that the daylight factor (DF) on the office example agree with Radiance's
+The project asks that the daylight factor (DF) on the office example agree with Radiance's
 `rtrace -I` on the exported scene within {pct(TOLERANCE, 0)} mean relative error, and the same
 for a CIE clear sky with sun; and that the difference made by Radiance's own `gensky` sky, which
 blends sky and ground near the horizon, be measured.  The exported sky is ours, written in

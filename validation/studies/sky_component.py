@@ -36,7 +36,7 @@ near the walls.  Skies: the 15 CIE standard general skies (ISO 15469:2004) with 
 altitude 40°, azimuth 210° (south-south-west; it shapes the sky and adds no direct light),
 and the traditional CIE overcast sky (Moon & Spencer 1942), each of E_h = 10,000 lux.  The
 tool runs at the scene defaults (:func:`lbl_illum.options.scene_defaults`, the ``high``
-preset), with one seed per run.  The criterion of issue 5 is |SC_tool / SC_ref − 1| ≤ 5 %
+preset), with one seed per run.  The project's criterion is |SC_tool / SC_ref − 1| ≤ 5 %
 at every sensor.
 
 References: CIE Publication 16 (1970), *Daylight*; ISO 15469:2004 / CIE S 011/E:2003,
@@ -68,7 +68,7 @@ ROOF_SIDES = (1.0, 4.0)                              # [m] sides of the square r
 FACADE_ROOM = (6.0, 8.0, 3.0)                        # [m]
 FACADE_WINDOW = (2.0, 4.0, 1.0, 2.5)                 # [m] x0, x1, sill z0, head z1 in the wall y = 0
 EDGE = 0.05                                          # [m] sensors this far inside and outside an edge
-TOLERANCE = 0.05                                     # issue 5 §5: at every sensor
+TOLERANCE = 0.05                                     # the project's criterion: at every sensor
 NODES = 256                                          # Gauss–Legendre nodes per edge direction of the reference
 SKIES = ["cie-overcast", *range(1, 16)]              # "cie-overcast" or a CIE general type 1…15
 
@@ -312,7 +312,7 @@ def run(ctx: StudyContext) -> Report:
 The sky component SC = E / E_h is the part of the daylight factor that comes straight from the
 sky through an opening.  In a room with black interior surfaces (reflectance 0) under a sky with
 a black ground it is all the light there is, so the tool can be checked against a direct
-integral of the sky's luminance over the opening, point by point.  Issue 5 asks for agreement
+integral of the sky's luminance over the opening, point by point.  The project asks for agreement
 within {pct(TOLERANCE, 0)} at every sensor, sensors near the opening's edges included, at the
 default settings (the `{DEFAULT_PRESET}` preset) with a `[[portals]]` polygon over the opening.""")
     rep.heading("Rooms, skies and sensors")
