@@ -472,6 +472,15 @@ def _view3d(scene, points, values, areas, label, screenshot, title=None) -> None
         raise RunError(f"{screenshot}: the 3-D view failed ({reason})") from None
 
 
+def _start_compiling() -> None:
+    """On a first run, start compiling half the engine's kernels in a second process
+    before the scene is read (:func:`lbl_illum.engine.compiled.start_first_run`): the
+    scene's first parse then overlaps it."""
+    from ..engine.compiled import start_first_run
+
+    start_first_run()
+
+
 def _run_illuminance(args) -> int:
     t0 = time.perf_counter()
     from ..workplane.metrics import readable, summary_line
@@ -480,6 +489,8 @@ def _run_illuminance(args) -> int:
 
     _check_run_files(args)
     cluster = open_study_cluster(args)
+    if cluster is None:
+        _start_compiling()
     try:
         scene = load_scene(args.scene)
         points, normals, areas = read_points(args.points, scene.unit_scale, with_areas=True)
@@ -539,6 +550,8 @@ def _run_daylight_factor(args) -> int:
 
     _check_run_files(args)
     cluster = open_study_cluster(args)
+    if cluster is None:
+        _start_compiling()
     try:
         scene = _overcast_scene(load_scene(args.scene), args.sky_illuminance, args.ground_reflectance)
         E_h = unobstructed_horizontal_illuminance(lambda d: luminance(scene.sky.luminance(d)))
