@@ -99,9 +99,12 @@ class PortalSet:
         out = np.ones(len(points), bool)
         for n, offset in zip(normals, d):
             out &= points @ n <= offset + self.tolerance
-        if self.enclosure is not None:
-            out &= np.all((points >= self.enclosure[0]) & (points <= self.enclosure[1]), axis=1)
-        return out.astype(np.uint8)
+        if self.enclosure is not None:      # by axis: np.all over rows of 3 took 4/5 of the time
+            lo, hi = self.enclosure
+            for c in range(3):
+                out &= points[:, c] >= lo[c]
+                out &= points[:, c] <= hi[c]
+        return out.view(np.uint8)
 
     def inside(self, points: np.ndarray) -> np.ndarray:
         """(n,) bool: each point lies behind at least half of the portals' area."""
