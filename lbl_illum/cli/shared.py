@@ -149,9 +149,12 @@ def cluster_compute(cluster, integ, recipe, points, normals, args, progress, spa
     cluster.prepare(recipe, integ.options, integ.fingerprint, integ.scene, integ.context)
     plan = Decomposition(getattr(args, "chunk_size", None) or CHUNK_POINTS,
                          getattr(args, "round_chunks", None) or ROUND_CHUNKS)
-    result, costs, _ = solve_points(cluster, recipe, integ, points, normals, spacing=spacing, taper=taper,
-                                    plan=plan, cache_file=getattr(args, "cache", None),
-                                    rebuild=bool(getattr(args, "rebuild_cache", False)), progress=progress)
+    try:
+        result, costs, _ = solve_points(cluster, recipe, integ, points, normals, spacing=spacing, taper=taper,
+                                        plan=plan, cache_file=getattr(args, "cache", None),
+                                        rebuild=bool(getattr(args, "rebuild_cache", False)), progress=progress)
+    finally:
+        cluster.release(recipe)          # a batch's next study may be another scene
     return result, costs
 
 

@@ -36,16 +36,19 @@ def annual_solver(cluster, scene_file: str, plan: Decomposition = Decomposition(
         recipe = SceneRecipe(scene_file, design.sky, design.sun, True,
                              None if shades is None else (tuple(shades[0]), float(shades[1])))
         cluster.prepare(recipe, integ.options, integ.fingerprint, design, integ.context)
-        result, run_costs, vectors = solve_points(cluster, recipe, integ, points, normals, plan=plan,
-                                                  progress=progress, answer=False,
-                                                  coefficients={"mf": matrix.patches.mf, "suns": suns})
-        if costs is not None:
-            costs.append(run_costs)
-        if progress is not None:
-            progress.describe("direct sun, hour by hour")
-        sun = cluster.share((np.asarray(matrix.sun_direction), np.asarray(matrix.direct_normal_illuminance)))
-        parts = cluster.run(direct_sun_chunk, [(recipe, sun, points[s], normals[s])
-                                               for s in plan.chunks(len(points))])
+        try:
+            result, run_costs, vectors = solve_points(cluster, recipe, integ, points, normals, plan=plan,
+                                                      progress=progress, answer=False,
+                                                      coefficients={"mf": matrix.patches.mf, "suns": suns})
+            if costs is not None:
+                costs.append(run_costs)
+            if progress is not None:
+                progress.describe("direct sun, hour by hour")
+            sun = cluster.share((np.asarray(matrix.sun_direction), np.asarray(matrix.direct_normal_illuminance)))
+            parts = cluster.run(direct_sun_chunk, [(recipe, sun, points[s], normals[s])
+                                                   for s in plan.chunks(len(points))])
+        finally:
+            cluster.release(recipe)
         direct = np.concatenate([p[0] for p in parts]) if parts else np.zeros((0, matrix.shape[1]), np.float32)
         stats = result.stats
         stats.rays += int(sum(p[1] for p in parts))

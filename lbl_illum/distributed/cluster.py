@@ -80,7 +80,10 @@ class InProcess:
             remember(recipe, scene, context)
 
     def release(self, recipe) -> None:
-        pass
+        """Drop the scene of ``recipe`` from this process."""
+        from .worker import forget
+
+        forget(recipe)
 
     def close(self) -> None:
         pass
@@ -135,8 +138,19 @@ class DaskCluster:
                              f"version on every worker ({len(other)} of {len(theirs)} differ)")
 
     def share(self, value):
-        """A future of ``value`` held by every worker (sent once per worker)."""
-        return self.client.scatter(value, broadcast=True, hash=False)
+        """A future of ``value`` held by every worker (sent once per worker).  A worker lost
+        just before (the scheduler has not yet struck it off) makes the send fail; it is
+        tried again, for up to :data:`WORKER_SECONDS`, as the scheduler notices."""
+        import time
+
+        deadline = time.monotonic() + WORKER_SECONDS
+        while True:
+            try:
+                return self.client.scatter(value, broadcast=True, hash=False)
+            except OSError:          # CommClosedError, a refused connection to the lost worker
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.25)
 
     def run(self, fn, calls, done=None):
         """Run ``fn(*args)`` for every ``args`` of ``calls`` on the cluster; the results in
