@@ -203,11 +203,20 @@ def _on_disk(dispatcher) -> bool:
         return True
 
 
+def _argument_types(signature: str) -> tuple:
+    """The numba types of a signature's arguments.  A dispatcher compiled with them keys
+    its disk cache entry as a call does (given the text, it would key it by the text,
+    which no call finds)."""
+    from numba.core import sigutils
+
+    return tuple(sigutils.normalize_signature(signature)[0])
+
+
 def compile_part(part: int) -> None:
     """Compile the kernels of ``FIRST_RUN[part]`` (each found in numba's disk cache, or
     compiled and written there)."""
     for name, signature in FIRST_RUN[part]:
-        _dispatcher(name).compile(signature)
+        _dispatcher(name).compile(_argument_types(signature))
 
 
 def start_first_run() -> None:
