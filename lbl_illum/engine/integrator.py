@@ -636,8 +636,9 @@ class Integrator:
                                 zone=self.context.zone(P), taper=taper)
         return E
 
-    def evaluate_level(self, k, pending: _Pending, next_answer, run: RunPlan):
-        """Give the records of ``pending`` their values (Eq. 2)."""
+    def evaluate_level(self, k, pending: _Pending, next_answer, run: RunPlan, hit_Ns=None):
+        """Give the records of ``pending`` their values (Eq. 2).  ``hit_Ns``: the hits'
+        shading normals in float64, if the caller has them already."""
         if not pending.records:
             return
         lv = self.cache.levels[k]
@@ -647,7 +648,7 @@ class Integrator:
         ray_L = pending.cat("ray_L").astype(np.float64) if pending.ray_L else None
         if k < self.options.bounces:
             hP = pending.cat("hit_P")
-            hNs = pending.cat("hit_Ns", dtype=np.float32).astype(np.float64)
+            hNs = hit_Ns if hit_Ns is not None else pending.cat("hit_Ns", dtype=np.float32).astype(np.float64)
             hNg = pending.cat("hit_Ng", dtype=np.float32).astype(np.float64)
             weight = pending.cat("hit_weight", dtype=np.float32)
             owner = pending.cat("hit_owner", width=0, dtype=np.int32)
@@ -734,9 +735,11 @@ class Integrator:
             own_next = self._solve_level(k + 1, hits, run) if deeper else None
             run.block_stack[-1][0] = b + 1.0           # the block's levels below are solved
             self._tick(run, f"evaluating level {k}{where}")
-            next_answer = self._answer(k + 1, hP, pending.cat("hit_Ns"), own_next) if deeper else None
+            # the hits' normals in float64 once, for the lookup and for their direct light
+            hNs = pending.cat("hit_Ns").astype(np.float64) if deeper else None
+            next_answer = self._answer(k + 1, hP, hNs, own_next) if deeper else None
             pending.next_solved, pending.next_own = deeper, own_next
-            self.evaluate_level(k, pending, next_answer, run)
+            self.evaluate_level(k, pending, next_answer, run, hNs)
             self._close_block(k, run)
         run.block_stack.pop()
         if any(own is None for own in own_parts):
