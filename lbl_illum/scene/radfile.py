@@ -419,7 +419,8 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
     from .polygons import area_warnings, triangulate_faces
 
     coords, lines, names, owners = [], [], [], []
-    quadric_tris: list[tuple[str, np.ndarray]] = []
+    quadric_tris: list[tuple[str, np.ndarray | int]] = []
+    laterals: list[RadPrimitive] = []
     skipped: dict[str, int] = {}
     order: dict[str, None] = {}
     for p in prims:
@@ -439,6 +440,12 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
             if len(p.reals) not in _REAL_COUNTS[p.kind]:
                 raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': needs {_REAL_COUNTS[p.kind][0]} "
                                  f"reals, got {len(p.reals)}")
+            if p.kind in LATERAL_TYPES:                 # tessellated all at once below
+                if _lateral_arguments(p, where) is not None:
+                    quadric_tris.append((p.modifier, len(laterals)))
+                    laterals.append(p)
+                    order.setdefault(p.modifier)
+                continue
             tri = _quadric(p, where)
             if len(tri):
                 quadric_tris.append((p.modifier, tri))
@@ -467,8 +474,9 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
             sel = result.triangles[owner == modifier]
             if len(sel):
                 per_modifier[modifier].append(vertices[sel])
+    lateral_tris = _lateral_surfaces(laterals)
     for modifier, tri in quadric_tris:
-        per_modifier[modifier].append(tri)
+        per_modifier[modifier].append(lateral_tris[tri] if isinstance(tri, int) else tri)
     return [MeshPart(m, m, None, m, np.concatenate(parts) * scale) for m, parts in per_modifier.items() if parts]
 
 
@@ -486,9 +494,74 @@ def _frame(axis: np.ndarray):
     return t[0], b[0]
 
 
+#: Primitives whose surface lies between two circles (:func:`_lateral_surfaces`).
+LATERAL_TYPES = ("cylinder", "tube", "cone", "cup")
+
+
+def _lateral_arguments(p: RadPrimitive, where: str):
+    """``(p0, p1, r0, r1)`` of a cylinder, tube, cone or cup, or None when it is degenerate
+    (no length, or both radii zero); negative radii are an :class:`InputError`."""
+    r = p.reals
+    p0, p1 = r[:3], r[3:6]
+    r0, r1 = (r[6], r[6]) if p.kind in ("cylinder", "tube") else (r[6], r[7])
+    if np.linalg.norm(p1 - p0) == 0.0 or (r0 == 0.0 and r1 == 0.0):
+        return None
+    if r0 < 0 or r1 < 0:
+        raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': radii must not be negative")
+    return p0, p1, r0, r1
+
+
+def _lateral_surfaces(prims: list[RadPrimitive]) -> list[np.ndarray]:
+    """(m, 3, 3) triangles of each (non-degenerate) cylinder, tube, cone or cup of
+    ``prims``, all tessellated at once: the lateral surface between two :data:`SEGMENTS`-gons
+    whose circumradii are k r0 and k r1, k first making the n-gons' perimeters the circles'
+    and then solved by four secant steps so that the triangles' area equals the true
+    surface's, π (r0 + r1) √(L² + (r1 − r0)²).  Zero-area triangles (at a cone's apex) are
+    dropped; tubes and cups face inward."""
+    from .geometry import orthonormal_basis
+
+    if not prims:
+        return []
+    args = [_lateral_arguments(p, "") for p in prims]
+    p0 = np.array([a[0] for a in args])
+    p1 = np.array([a[1] for a in args])
+    r0 = np.array([a[2] for a in args], np.float64)
+    r1 = np.array([a[3] for a in args], np.float64)
+    axis = p1 - p0
+    length = np.linalg.norm(axis, axis=1)
+    t, b = orthonormal_basis(axis / length[:, None])
+    c = _circle(SEGMENTS)
+    ring = c[None, :, :1] * t[:, None, :] + c[None, :, 1:] * b[:, None, :]       # (n, S, 3)
+    j = np.roll(np.arange(SEGMENTS), -1)
+    exact = np.pi * (r0 + r1) * np.hypot(length, r1 - r0)
+
+    def lateral(k):
+        a = p0[:, None, :] + (k * r0)[:, None, None] * ring
+        b_ = p1[:, None, :] + (k * r1)[:, None, None] * ring
+        return np.concatenate([np.stack([a, a[:, j], b_[:, j]], 2), np.stack([a, b_[:, j], b_], 2)], axis=1)
+
+    def twice_areas(tri):
+        return np.linalg.norm(np.cross(tri[..., 1, :] - tri[..., 0, :], tri[..., 2, :] - tri[..., 0, :]), axis=-1)
+
+    k = np.full(len(prims), np.pi / (SEGMENTS * np.sin(np.pi / SEGMENTS)))   # perimeter of the n-gon = the circle's
+    active = np.ones(len(prims), bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for _ in range(4):                                       # then the area exactly (secant on k)
+            area = 0.5 * twice_areas(lateral(k)).sum(axis=1)
+            k2 = k * 1.001
+            slope = (0.5 * twice_areas(lateral(k2)).sum(axis=1) - area) / (k2 - k)
+            active &= slope > 0
+            k = np.where(active, k + (exact - area) / slope, k)
+    tri = lateral(k)
+    keep = twice_areas(tri) > 0
+    inward = np.array([p.kind in ("tube", "cup") for p in prims])
+    return [tri[i][keep[i]][:, [0, 2, 1]] if inward[i] else tri[i][keep[i]] for i in range(len(prims))]
+
+
 def _quadric(p: RadPrimitive, where: str) -> np.ndarray:
-    """(m, 3, 3) triangles of a sphere, cylinder, cone or ring primitive (module text);
-    empty for a degenerate one (zero radius or length)."""
+    """(m, 3, 3) triangles of a sphere, bubble or ring primitive (module text); empty for a
+    degenerate sphere (zero radius).  Cylinders, tubes, cones and cups:
+    :func:`_lateral_surfaces`."""
     r = p.reals
     if p.kind in ("sphere", "bubble"):
         centre, radius = r[:3], abs(r[3])
@@ -514,36 +587,7 @@ def _quadric(p: RadPrimitive, where: str) -> np.ndarray:
             return np.stack([np.broadcast_to(centre, outer.shape), outer, outer[j]], axis=1)
         inner = centre + k * r0 * ring
         return np.concatenate([np.stack([inner, outer, outer[j]], 1), np.stack([inner, outer[j], inner[j]], 1)])
-    # cylinder, tube, cone, cup: the lateral surface between two circles
-    p0, p1 = r[:3], r[3:6]
-    r0, r1 = (r[6], r[6]) if p.kind in ("cylinder", "tube") else (r[6], r[7])
-    axis = p1 - p0
-    length = np.linalg.norm(axis)
-    if length == 0.0 or (r0 == 0.0 and r1 == 0.0):
-        return np.zeros((0, 3, 3))
-    if r0 < 0 or r1 < 0:
-        raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': radii must not be negative")
-    t, b = _frame(axis / length)
-    c = _circle(SEGMENTS)
-    ring = c[:, :1] * t + c[:, 1:] * b
-    j = np.roll(np.arange(SEGMENTS), -1)
-    exact = np.pi * (r0 + r1) * np.hypot(length, r1 - r0)
-
-    def lateral(k):
-        a, b_ = p0 + k * r0 * ring, p1 + k * r1 * ring
-        tri = np.concatenate([np.stack([a, a[j], b_[j]], 1), np.stack([a, b_[j], b_], 1)])
-        return tri[np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1) > 0]
-
-    k = np.pi / (SEGMENTS * np.sin(np.pi / SEGMENTS))           # perimeter of the n-gon = the circle's
-    for _ in range(4):                                           # then the area exactly (secant on k)
-        area = _area(lateral(k))
-        k2 = k * 1.001
-        slope = (_area(lateral(k2)) - area) / (k2 - k)
-        if slope <= 0:
-            break
-        k += (exact - area) / slope
-    tri = lateral(k)
-    return tri[:, [0, 2, 1]] if p.kind in ("tube", "cup") else tri
+    raise ValueError(f"not a sphere or ring: {p.kind}")
 
 
 def _area(tri: np.ndarray) -> float:
