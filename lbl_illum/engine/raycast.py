@@ -298,7 +298,9 @@ class RayCaster:
 
     def epsilon(self, points: np.ndarray) -> np.ndarray:
         """(n,) self-hit offset ε = ``SELF_HIT_EPSILON`` · (|P|∞ + ℓ) [m] (module docstring)."""
-        return SELF_HIT_EPSILON * (np.abs(np.asarray(points, np.float64)).max(axis=1) + self.length_scale)
+        a = np.abs(np.asarray(points, np.float64))
+        # |P|∞ by columns: numpy's max over rows of three took 6× as long
+        return SELF_HIT_EPSILON * (np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2]) + self.length_scale)
 
 
 class Tracer:
