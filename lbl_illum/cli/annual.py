@@ -196,7 +196,8 @@ def _annual(args, cluster) -> int:
               f"'{args.preset}'", file=sys.stderr)
         for warning in scene.warnings:
             print(f"lbl-illum: warning: {warning}", file=sys.stderr)
-    bar = ProgressBar(enabled=not args.quiet)
+    lent = getattr(args, "progress", None)       # a batch's display (lbl_illum.cli.batch)
+    bar = lent if lent is not None else ProgressBar(enabled=not args.quiet)
     solver, costs = _solver(args, cluster, bar)
     groups = []
     n = len(points)
@@ -215,7 +216,8 @@ def _annual(args, cluster) -> int:
                 groups.append(metrics.WindowGroup(name, year.illuminance, year.direct_sun))
             glare = _glare(views, eyes, light, matrix, args, n, bar) if views else {}
     finally:
-        bar.close()
+        if lent is None:
+            bar.close()
     daylight_hours = metrics.en17037_daylight_hours(
         diffuse_horizontal=np.where(matrix.daylight, matrix.diffuse_horizontal_illuminance, np.nan))
     E_grid, D_grid = light.illuminance[:n], light.direct_sun[:n]

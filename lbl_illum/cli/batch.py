@@ -27,11 +27,12 @@ An option's key is its long name without the dashes (``min_spacing`` or ``min-sp
 parsed and checked before any runs (unknown options, missing files, bad or shared
 output paths: one line naming the study, exit 2, nothing written).  The studies then run
 one after the other, each on the batch's cluster (``--workers``, ``--scheduler``; the
-chunks and rounds of ``--chunk-size`` and ``--round-chunks``), their own progress lines
-and summary line gathered, not shown: the batch shows one progress display (studies
-done, time left) and at the end one table (study, command, seconds, the study's summary
-line).  A study that fails while running is marked in the table and the others go on
-(exit status 1).
+chunks and rounds of ``--chunk-size`` and ``--round-chunks``), their progress going to
+the batch's one display (the study, its stage, percent and time left of the batch) and
+their summary lines gathered, not shown: at the end the batch prints one table (study, command, seconds, the study's summary
+line).  The display's share of the work done is each study's own (its rounds, its
+levels' blocks) as its share of the batch.  A study that fails while running is marked in
+the table and the others go on (exit status 1).
 """
 
 from __future__ import annotations
@@ -197,24 +198,24 @@ def _parse(study: Study, parser):
     return args
 
 
-def _StudiesBar(**kw):
-    """The batch's one progress display: studies done of all, the study running, the time
-    left (:class:`~lbl_illum.cli.progress.ProgressBar` without the rays, which the studies
-    count for themselves)."""
-    from .progress import ProgressBar
+class _StudyProgress:
+    """A study's progress calls (``update``, ``describe``, ``fraction``) forwarded to the
+    batch's one display, the study's share of the work being its share of the batch."""
 
-    class StudiesBar(ProgressBar):
-        def _line(self) -> None:
-            now = self.clock()
-            if now - self.last < 0.0:
-                return
-            self.last = now
-            elapsed = now - self.start
-            left = f", about {elapsed * (1.0 - self.done) / self.done:.0f} s left" if self.done > 0 else ""
-            print(f"{self.label}: {self.stage}, {100.0 * self.done:.0f}%{left}, {elapsed:.0f} s", file=self.stream,
-                  flush=True)
+    enabled = False          # no compile listener of its own (cli.progress.compile_notice)
 
-    return StudiesBar(**kw)
+    def __init__(self, bar, index: int, count: int, name: str):
+        self.bar, self.index, self.count, self.name = bar, index, count, name
+
+    def update(self, rays: int) -> None:
+        self.bar.update(rays)
+
+    def describe(self, text: str) -> None:
+        head = f"study {self.index + 1} of {self.count} ({self.name})"
+        self.bar.describe(f"{head}: {text}" if text and text != "done" else head)
+
+    def fraction(self, done: float) -> None:
+        self.bar.fraction((self.index + min(max(float(done), 0.0), 1.0)) / self.count)
 
 
 class _Borrowed:
@@ -243,11 +244,14 @@ def batch_command(args, parser) -> int:
     parsed = [_parse(study, parser) for study in studies]
     cluster = open_study_cluster(args)
     rows = []
-    bar = _StudiesBar(enabled=not args.quiet, label="lbl-illum batch")
+    from .progress import ProgressBar
+
+    bar = ProgressBar(enabled=not args.quiet, label="lbl-illum batch")
     try:
         for i, (study, sargs) in enumerate(zip(studies, parsed)):
-            bar.describe(f"study {i + 1} of {len(studies)}: {study.name}")
-            bar.fraction(i / len(studies))
+            sargs.progress = _StudyProgress(bar, i, len(studies), study.name)
+            sargs.progress.describe("")
+            sargs.progress.fraction(0.0)
             for key in ("workers", "scheduler", "chunk_size", "round_chunks"):
                 setattr(sargs, key, getattr(args, key))
             sargs.cluster = _Borrowed(cluster) if cluster is not None else None
@@ -303,7 +307,7 @@ def _dispatch(command: str, args) -> int:
     if command == "render":
         from .render import render_command
 
-        return render_command(args)
+        return render_command(args, progress=args.progress)
     from .annual import annual_command
 
     return annual_command(args)

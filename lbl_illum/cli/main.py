@@ -381,7 +381,8 @@ def _compute(scene, args, points, normals, cluster=None, recipe=None):
     if not args.quiet:
         for note in integ.portal_notes():
             print(f"lbl-illum: note: {note}", file=sys.stderr)
-    bar = _ProgressBar(enabled=not args.quiet)
+    lent = getattr(args, "progress", None)       # a batch's display (lbl_illum.cli.batch)
+    bar = lent if lent is not None else _ProgressBar(enabled=not args.quiet)
     integ.progress = bar
     costs = None
     try:
@@ -395,7 +396,8 @@ def _compute(scene, args, points, normals, cluster=None, recipe=None):
         with compile_notice(enabled=not args.quiet, bar=bar):
             result = integ.compute(points, normals)       # writes the cache file too
     finally:
-        bar.close()
+        if lent is None:
+            bar.close()
     return result, integ, options, costs
 
 

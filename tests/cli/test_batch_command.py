@@ -49,7 +49,31 @@ def test_batch_runs_every_study_and_prints_one_table(batch, capsys):
     assert all(r["status"] == "ok" and "on one process (--workers 0) (2 rounds)" in r["summary"] for r in table)
     assert err.splitlines()[-1].startswith("lbl-illum: batch of 3 studies in ")
     assert err.splitlines()[-1].endswith("on one process (--workers 0): 3 done, 0 failed")
-    assert "study 3 of 3: daylight-factor bright" in err
+    assert not any(line.startswith("lbl-illum: illuminance at") for line in err.splitlines())   # in the table
+
+
+def test_a_study_s_progress_is_its_share_of_the_batch():
+    from lbl_illum.cli.batch import _StudyProgress
+
+    class Bar:
+        def __init__(self):
+            self.seen = []
+
+        def fraction(self, f):
+            self.seen.append(("fraction", f))
+
+        def describe(self, text):
+            self.seen.append(("describe", text))
+
+        def update(self, rays):
+            self.seen.append(("update", rays))
+
+    bar = Bar()
+    study = _StudyProgress(bar, 2, 4, "grid")
+    study.fraction(0.5)
+    study.describe("round 1 of 3")
+    study.update(10)
+    assert bar.seen == [("fraction", 0.625), ("describe", "study 3 of 4 (grid): round 1 of 3"), ("update", 10)]
 
 
 @pytest.mark.parametrize("studies, message", [
