@@ -129,8 +129,18 @@ class DaskCluster:
             self.client.wait_for_workers(1, timeout=WORKER_SECONDS)
         except Exception:   # TimeoutError; older versions raise others
             raise InputError(f"scheduler {address}: no workers joined within {WORKER_SECONDS:g} s") from None
+        self._check_versions(address)
+
+    def _check_versions(self, address=None) -> None:
+        """Refuse workers that run another version of the project (or none)."""
         mine = project_identity()
-        theirs = self.client.run(worker_identity, wait=True)
+        try:
+            theirs = self.client.run(worker_identity, wait=True)
+        except Exception as exc:  # a worker without lbl_illum: ModuleNotFoundError in the unpickling
+            reason = str(exc).strip().splitlines()[0][:100] if str(exc).strip() else ""
+            raise InputError(f"scheduler {address or self.name}: a worker cannot run lbl_illum "
+                             f"({type(exc).__name__}{': ' + reason if reason else ''}); install it on every "
+                             "worker") from None
         other = {w: v for w, v in theirs.items() if v != mine}
         if other:
             worker, version = sorted(other.items())[0]
@@ -181,6 +191,7 @@ class DaskCluster:
         from .plugin import ScenePlugin
         from .worker import scene_check
 
+        self._check_versions()           # workers that joined since the cluster was checked
         self.client.register_plugin(ScenePlugin(recipe), name=_plugin_name(recipe))
         seen = self.client.run(scene_check, recipe, options, wait=True)
         for worker, answer in sorted(seen.items()):
