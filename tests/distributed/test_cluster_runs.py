@@ -132,9 +132,11 @@ def test_a_scheduler_without_workers_is_one_line(monkeypatch):
         empty.close()
 
 
-def test_command_on_the_scheduler_writes_the_bits_of_workers_0(local, tmp_path, capsys):
+@pytest.mark.parametrize("command", ["illuminance", "daylight-factor"])
+def test_command_on_the_scheduler_writes_the_bits_of_workers_0(local, tmp_path, capsys, command):
+    """The daylight factor's workers replace the scene's sky by the overcast one, as the driver."""
     cluster, _ = local
-    base = ["illuminance", str(OFFICE / "scene.toml"), "--points", str(OFFICE / "grid.pts"), "--preset", "draft",
+    base = [command, str(OFFICE / "scene.toml"), "--points", str(OFFICE / "grid.pts"), "--preset", "draft",
             "--bounces", "2", "--samples", "32", "--point-samples", "64", "--chunk-size", "40"]
     assert main(base + ["-o", str(tmp_path / "here.csv"), "--workers", "0"]) == 0
     assert main(base + ["-o", str(tmp_path / "there.csv"), "--scheduler", cluster.scheduler_address,
