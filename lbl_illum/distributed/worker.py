@@ -20,6 +20,7 @@ of a lost worker runs again elsewhere).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import hashlib
 import pickle
@@ -90,8 +91,10 @@ def remember(recipe: SceneRecipe, scene, context) -> None:
 
 
 def forget(recipe: SceneRecipe) -> None:
-    """Drop the scene of ``recipe`` from this process (the plugin's teardown)."""
+    """Drop the scene of ``recipe`` from this process (the plugin's teardown), and the last
+    record set's cache (:func:`cache_of`)."""
     _BUILT.pop(recipe.key, None)
+    _LAST_SET[:] = [None, None]
 
 
 def scene_context(recipe: SceneRecipe):
@@ -138,9 +141,30 @@ class ChunkRecords:
     seconds: float = 0.0
 
 
+#: The last record set a task of this process started from and the cache built from it
+#: (octrees and lookup layouts made), which the next task of the same round copies.
+_LAST_SET: list = [None, None]
+
+
+def cache_of(base: CacheData):
+    """A cache of the records of ``base``, the task's own to add to: built once per record
+    set in this process (:func:`~lbl_illum.io.cachefile.cache_from_data`, then the lookup
+    layouts), copied for each task (for 10^6 records the copy takes 0.3 s, the building
+    1.1 s).  A copy holds the same arrays, octree and layout as a new build, so the task's
+    results are the same bits either way."""
+    if _LAST_SET[0] is not base:
+        _LAST_SET[:] = [None, None]             # the previous round's set is dropped first
+        cache = cache_from_data(base)
+        for lv in cache.levels:
+            if lv.count and lv.accuracy > 0:
+                lv.freeze()
+        _LAST_SET[:] = [base, cache]
+    return copy.deepcopy(_LAST_SET[1])
+
+
 def _integrator(recipe, options, base: CacheData, stream) -> Integrator:
     scene, context = scene_context(recipe)
-    integ = Integrator(scene, options, cache_from_data(base), context=context)
+    integ = Integrator(scene, options, cache_of(base), context=context)
     integ.stream = stream
     return integ
 
