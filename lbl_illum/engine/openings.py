@@ -96,12 +96,22 @@ def _planes(vertices: np.ndarray, tolerance: float):
     n *= np.where(big < 0, -1.0, 1.0)
     d = np.einsum("ij,ij->i", n, vertices[index, 0])
     key = np.column_stack([np.round(n / NORMAL_TOLERANCE), np.round(d / tolerance)]).astype(np.int64)
-    _, group, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    group = group.ravel()
+    # planes = distinct keys, numbered in the keys' lexicographic order (as np.unique over
+    # rows numbers them, which sorts the rows as records: ten times slower); lexsort is
+    # stable, so each plane's triangles stay in index order
+    order = np.lexsort(key.T[::-1])
+    ordered = key[order]
+    first = np.ones(len(order), bool)
+    for c in range(key.shape[1]):
+        first[1:] &= ordered[1:, c] == ordered[:-1, c]
+    first = ~first
+    first[:1] = True
+    group = np.empty(len(order), np.int64)
+    group[order] = np.cumsum(first) - 1
+    counts = np.bincount(group)
     area = np.bincount(group, 0.5 * area2[index], minlength=len(counts))
     wanted = np.flatnonzero((area >= MIN_PLANE_AREA) & (counts >= MIN_PLANE_TRIANGLES)
                             & (counts <= MAX_PLANE_TRIANGLES))
-    order = np.argsort(group, kind="stable")
     bounds = np.concatenate([[0], np.cumsum(counts)])
     for g in wanted:
         local = order[bounds[g]:bounds[g + 1]]
