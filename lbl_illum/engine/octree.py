@@ -314,13 +314,15 @@ def _layout(order, count, P, N, R, zone, accuracy):
     each level-1 box."""
     n_chunks = (count + LANES - 1) // LANES
     n_pad = n_chunks * LANES
-    # explicit loops: numba compiles slice assignments and np.full slowly (first run)
-    perm = np.zeros(n_pad, np.int32)
+    # explicit loops: numba compiles slice assignments, np.full and np.zeros slowly (first run)
+    perm = np.empty(n_pad, np.int32)
     pos = np.empty((3, n_pad))
-    nr = np.zeros((5, n_pad), np.float32)
+    nr = np.empty((5, n_pad), np.float32)
     for j in range(count, n_pad):
+        perm[j] = 0
         for c in range(3):
             pos[c, j] = np.nan
+            nr[c, j] = 0.0
         nr[3, j] = 1.0
         nr[4, j] = -1.0
     for j in range(count):
@@ -337,8 +339,9 @@ def _layout(order, count, P, N, R, zone, accuracy):
     while k > 1 or n_levels < 2:
         k = (k + LANES - 1) // LANES
         n_levels += 1
-    level_start = np.zeros(n_levels + 1, np.int64)
-    level_count = np.zeros(n_levels, np.int64)
+    level_start = np.empty(n_levels + 1, np.int64)
+    level_start[0] = 0
+    level_count = np.empty(n_levels, np.int64)
     k = n_chunks
     for lev in range(n_levels):
         level_count[lev] = k
