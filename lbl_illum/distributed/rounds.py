@@ -220,7 +220,9 @@ def solve_points(cluster, recipe: SceneRecipe, integ: Integrator, points, normal
     stats.rays += int(sum(a[2] for a in answers))
     if any(o is not None for o in own):
         indirect = indirect + np.concatenate(own)
-    stats.records = list(base.record_counts)
+    # as an ordinary run counts them: a level without interpolation holds this run's records
+    stats.records = [made if info["accuracy"] == 0 else count for made, info, count
+                     in zip(stats.new_records, base.header["levels"], base.record_counts)]
     stats.seconds = time.perf_counter() - t0
     _tick(progress, "done", done=1.0)
     joined = np.concatenate(vectors) if coefficients is not None and vectors else None
