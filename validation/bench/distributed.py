@@ -164,7 +164,7 @@ def run_workloads(args) -> dict:
                         arrays[name].append(out)
                     print(f"  {name:7s} on {cluster.name}: {seconds:.2f} s (load {load_average()})", flush=True)
     finally:
-        for cluster in clusters.values():
+        for cluster in reversed(list(clusters.values())):    # last first: each restores Dask's log levels
             cluster.close()
     for name in jobs:
         r = results[name]
