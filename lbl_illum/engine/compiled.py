@@ -142,11 +142,12 @@ def kernels_on_disk() -> bool:
 #: process, the second meanwhile by a second one (:func:`start_first_run`), which first
 #: starts Python and numba (≈ 0.9 s) while the run reads the scene (a first run parses
 #: the office's OBJ: 1.3 s).  Compile times one by one on the 2-core machine of
-#: docs/performance (s): lookup 2.3, layout 0.9, directions 0.3, plane hits 0.3, compaction
-#: 0.25, nearest per key 0.2, hit light 0.15 | portal irradiance 1.0, coverage 0.7,
-#: gradients 0.65, radix sort 0.6, record keys 0.4, query keys 0.3, insertion 0.3, the
-#: rest 0.1–0.25 each.  From the command's start, the run's half is done after 5.6 CPU
-#: seconds and the second process's after 5.6 more from its start at 0.4 s.
+#: docs/performance (s): lookup 2.3, layout 0.9, directions 0.3, plane hits 0.3, nearest
+#: per key 0.2, hit light 0.15 | portal irradiance 1.0, coverage 0.7, gradients 0.65,
+#: radix sort 0.4, record keys 0.3, query keys 0.3, insertion 0.3, compaction 0.25, the
+#: rest 0.1–0.2 each.  From the command's start, the run's half is done after 5.6 CPU
+#: seconds (1.3 of them parsing the office's OBJ) and the second process's after 5.1
+#: more from its start at 0.4 s.
 #: A kernel missing here, or called with other types, is compiled when first called, as
 #: any other (tests/engine/test_compiled.py checks the README job's calls against this).
 FIRST_RUN = (
@@ -158,7 +159,6 @@ FIRST_RUN = (
      ("placement:_nearest_per_key", "(int64[::1], float64[::1])"),
      ("integrator:_add_hit_light", "(int32[::1], float32[:, ::1], float64[:, ::1], float64[:, ::1], int32[::1], "
       "float32[::1], float64[:, ::1])"),
-     ("integrator:_compact", "(bool[::1], int64[::1], float64[:, ::1], float64[:, ::1], int64[::1])"),
      ("octree:_lookup_kernel", "(float64[:, ::1], float64[:, ::1], uint8[::1], int64[::1], int64, float64, bool, "
       "bool, bool, float32[:, :, ::1], uint32[::1], int32[::1], float64[:, ::1], float32[:, ::1], "
       "float32[:, :, ::1], int64[::1], float64, float64[:, ::1], float64[::1], int32[::1], int32[:, ::1], "
@@ -174,6 +174,7 @@ FIRST_RUN = (
      ("placement:_distance_bands_kernel", "(float64[:, ::1], float64[::1], float64[::1], float64, int64[::1])"),
      ("placement:_cell_keys_kernel", "(float64[:, ::1], float64[:, ::1], int64[::1], float64, int64[::1], "
       "float64[::1])"),
+     ("integrator:_compact", "(bool[::1], int64[::1], float64[:, ::1], float64[:, ::1], int64[::1])"),
      ("lambert:_portal_kernel", "(float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[:, ::1], "
       "float64[:, :, ::1], float64[::1], float64[:, ::1], float64[:, ::1])"),
      ("gradients:_gradients_kernel", "(float64[:, ::1], float64[:, :, :, ::1], float64[:, :, :, ::1], "

@@ -126,8 +126,10 @@ def _portals(P, N, T, B, vertices, weight, outward, out):
         bx, by, bz = B[i, 0], B[i, 1], B[i, 2]
         rel = np.empty((3, 3))
         poly = np.empty((4, 3))
-        acc = np.zeros(6)
-        total = np.zeros(6)
+        acc = np.empty(6)                  # zeroed per portal below
+        total = np.empty(6)                # np.empty and a loop: numba's np.zeros compiles its own code
+        for c in range(6):
+            total[c] = 0.0
         for k in range(vertices.shape[0]):
             if weight[k] == 0.0:
                 continue

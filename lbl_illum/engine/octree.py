@@ -188,7 +188,9 @@ def _radix_order(keys):
     """Stable argsort of uint64 keys: least-significant-digit radix sort on 16-bit digits,
     skipping digits all keys share."""
     n = keys.shape[0]
-    order = np.arange(n)
+    order = np.empty(n, np.int64)           # loops, not np.arange and np.zeros: 0.2 s less compiling
+    for i in range(n):
+        order[i] = i
     k_in = keys.copy()
     k_out = np.empty(n, np.uint64)
     o_out = np.empty(n, np.int64)
@@ -199,7 +201,9 @@ def _radix_order(keys):
     shift = 0
     while shift < 64 and (top >> np.uint64(shift)) != np.uint64(0):
         s = np.uint64(shift)
-        count = np.zeros(65537, np.int64)
+        count = np.empty(65537, np.int64)
+        for d in range(65537):
+            count[d] = 0
         for i in range(n):
             count[np.int64((k_in[i] >> s) & mask) + 1] += 1
         same = False                        # do all keys share this digit?
@@ -233,9 +237,10 @@ def _query_keys(qP, center, half):
     n = qP.shape[0]
     keys = np.empty(n, np.uint64)
     scale = (1 << QUERY_BITS) / (2.0 * half)
+    bits = np.int64(QUERY_BITS)     # not the literal 10: _morton's one specialisation, shared with _record_keys
     for q in range(n):
         keys[q] = _morton(qP[q, 0], qP[q, 1], qP[q, 2], center[0] - half, center[1] - half, center[2] - half,
-                          scale, QUERY_BITS)
+                          scale, bits)
     return keys
 
 
