@@ -66,6 +66,15 @@ class InProcess:
 
     def run(self, fn, calls, done=None):
         """``[fn(*args) for args in calls]``, calling ``done(i, result)`` after each."""
+        return self.collect(self.submit(fn, calls), done)
+
+    def submit(self, fn, calls, priority: int = 0):
+        """Tasks to run later (here: when collected)."""
+        return fn, list(calls)
+
+    def collect(self, tasks, done=None):
+        """The results of :meth:`submit`'s tasks, in their order."""
+        fn, calls = tasks
         out = []
         for i, args in enumerate(calls):
             out.append(fn(*args))
@@ -166,11 +175,21 @@ class DaskCluster:
         """Run ``fn(*args)`` for every ``args`` of ``calls`` on the cluster; the results in
         the order of ``calls``; ``done(i, result)`` as each finishes.  A task whose worker
         is lost runs again on another (the scheduler's doing); its result is the same."""
+        return self.collect(self.submit(fn, calls), done)
+
+    def submit(self, fn, calls, priority: int = 0):
+        """Send the tasks ``fn(*args)`` now, to be collected later (:meth:`collect`); among
+        tasks waiting for a worker, those of higher ``priority`` start first (work that
+        fills the workers a round leaves idle: a lower one)."""
+        batch = next(self._keys)
+        return [self.client.submit(fn, *args, key=f"lbl_illum-{fn.__name__}-{batch}-{i}", pure=False,
+                                   priority=priority) for i, args in enumerate(calls)]
+
+    def collect(self, futures, done=None):
+        """The results of :meth:`submit`'s tasks in their order, ``done(i, result)`` as each
+        finishes."""
         from distributed import as_completed
 
-        batch = next(self._keys)
-        futures = [self.client.submit(fn, *args, key=f"lbl_illum-{fn.__name__}-{batch}-{i}", pure=False)
-                   for i, args in enumerate(calls)]
         index = {f.key: i for i, f in enumerate(futures)}
         out = [None] * len(futures)
         try:

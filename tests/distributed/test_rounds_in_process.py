@@ -91,3 +91,18 @@ def test_solving_then_answering_is_compute():
     direct, indirect = split.answer(P, N)
     assert np.all(solved.direct == 0.0) and np.all(solved.indirect == 0.0)
     assert np.array_equal(direct, whole.direct) and np.array_equal(indirect, whole.indirect)
+
+
+def test_a_year_by_rounds_has_the_ordinary_direct_sun_and_close_light():
+    """The direct sun by sensor chunks x hour batches is the ordinary run's, bit for bit (no
+    random numbers); the year's light by rounds is within 1 % of it on the mean."""
+    from lbl_illum.daylight.weather import read_weather
+    from lbl_illum.distributed.annual import annual_solver
+    from lbl_illum.engine.annual import annual_light
+
+    scene, P, N, options, recipe = office_job(point_samples=32)
+    weather = read_weather(OFFICE.parent / "weather" / "USA_CA_Oakland.Intl.AP.724930_TMY3.epw")
+    ordinary = annual_light(scene, P, N, weather, options)
+    rounds = annual_light(scene, P, N, weather, options, solve=annual_solver(InProcess(), recipe.path, PLAN))
+    assert np.array_equal(rounds.direct_sun, ordinary.direct_sun)
+    assert abs(rounds.illuminance.mean() / ordinary.illuminance.mean() - 1) < 0.01
