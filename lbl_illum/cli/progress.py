@@ -20,8 +20,9 @@ __all__ = ["ProgressBar", "LINE_SECONDS", "compile_notice"]
 #: Seconds between two plain progress lines (standard error not a terminal).
 LINE_SECONDS = 5.0
 #: What compiling the kernels adds to a first run [s]: the README command on 2 cores, first
-#: run against the next (``validation/bench/commands.py``: 27.0 s against 15.8 s).
-COMPILE_SECONDS = 11
+#: run against the next (``validation/bench/commands.py``: 22.4 s against 14.3 s at a load
+#: of 2, less on a quiet machine: :data:`lbl_illum.engine.compiled.FIRST_RUN`).
+COMPILE_SECONDS = 7
 
 
 class ProgressBar:
