@@ -237,13 +237,16 @@ def start_first_run() -> None:
     start compiling that part in a second Python process; :func:`finish_first_run`
     compiles the first part here and waits for it.  Compiling holds the GIL, so one
     process compiles on one core: this halves the 9 s of compiling of the README job's
-    first run on 2 cores.  Nothing on one core, when numba's JIT is disabled, or when
-    the kernels are on disk (every later run)."""
+    first run on 2 cores.  Nothing on one core, when numba's JIT is disabled, in a
+    worker process (a pool's or a cluster's: the workers of one run would each start
+    one), or when the kernels are on disk (every later run)."""
+    import multiprocessing
     import os
     import subprocess
     import sys
 
-    if _STARTED or numba.config.DISABLE_JIT or (os.cpu_count() or 1) < 2 or not sys.executable:
+    if (_STARTED or numba.config.DISABLE_JIT or (os.cpu_count() or 1) < 2 or not sys.executable
+            or multiprocessing.parent_process() is not None):
         return
     _STARTED.append(True)
     if all(_on_disk(_dispatcher(name)) for name, _ in FIRST_RUN[1]):
