@@ -671,7 +671,10 @@ def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: flo
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
     label = f"{label} {file}"
     parts = load_mesh_file(base_dir / file, label, scale, warnings)
-    definitions = {p.name: (p, w) for prims_, w in (radiance or {}).values() for p in prims_}
+    from .radfile import modifier_definitions
+
+    definitions = {name: (p, w) for prims_, w in (radiance or {}).values()
+                   for name, p in modifier_definitions(prims_).items()}
     vertices, material, matched = [], [], set()
     for part in parts:
         key = next((k for k in part.keys if k in mapped), None)

@@ -245,7 +245,9 @@ def test_unmapped_submesh_takes_the_material_of_its_name(tmp_path):
     import shutil
 
     shutil.copy(DATA / "room_corner.obj", tmp_path)
-    (tmp_path / "trim.mat").write_text("void metal brass\n0\n0\n5 .9 .6 .2 .8 .05\n\nvoid alias Trim brass\n")
+    # a surface named like a group ('trim') is no material: the sub-mesh's next name decides
+    (tmp_path / "trim.mat").write_text("void metal brass\n0\n0\n5 .9 .6 .2 .8 .05\n\nvoid alias Trim brass\n\n"
+                                       "brass polygon trim\n0\n0\n9 5 5 0  6 5 0  5 6 0\n")
     data = minimal()
     data["geometry"] = [{"file": "trim.mat"}, {"file": "room_corner.obj", "materials": {"Wall": "floor"}}]
     data["materials"]["white"] = {"type": "diffuse", "reflectance": 0.8}
