@@ -274,6 +274,10 @@ def _rle_scanlines(rgbe: np.ndarray) -> bytes:
 # Radiance HDR
 # ---------------------------------------------------------------------------
 
+#: Bytes in which rgbe.c-style readers read a Radiance header's lines (:func:`hdr_bytes`).
+HEADER_CHUNK = 128
+
+
 def hdr_bytes(rgb: np.ndarray, *, view: View | None = None, exposure: float = 1.0,
               command: str | None = None, rle: bool = True, pixel_aspect: float | None = None) -> bytes:
     """The bytes of a Radiance picture of photometric ``rgb`` [cd/m²] (see the module text).
@@ -297,6 +301,11 @@ def hdr_bytes(rgb: np.ndarray, *, view: View | None = None, exposure: float = 1.
     if pixel_aspect is not None and abs(pixel_aspect - 1.0) > 1e-6:
         lines.append(f"PIXASPECT={float(pixel_aspect):f}")
     lines.append("FORMAT=32-bit_rle_rgbe")
+    # Readers built on Ward's rgbe.c (OpenImageIO among them) read the header in pieces of
+    # 128 bytes: a line of a multiple of 128 characters leaves its newline to be read
+    # alone, as the empty line that ends the header, before FORMAT.  A trailing space
+    # keeps every line off those lengths (Radiance ignores it).
+    lines = [line + " " if len(line) % HEADER_CHUNK == 0 else line for line in lines]
     header = ("\n".join(lines) + "\n\n" + f"-Y {h} +X {w}\n").encode("ascii", "replace")
     rgbe = rgbe_encode(radiance_pixels(rgb, exposure))
     if rle and RLE_MIN_WIDTH <= w <= RLE_MAX_WIDTH:

@@ -171,6 +171,18 @@ def test_header_lines(tmp_path):
     assert parsed.primaries == images.REC709_PRIMARIES
 
 
+@pytest.mark.parametrize("length", [127, 128, 129, 256, 384])
+def test_header_lines_of_any_length_read_back(tmp_path, length):
+    """A command line of a multiple of 128 characters (a long path, or pytest's own
+    command line) once ended the header for OpenImageIO's reader, which reads lines in
+    128-byte pieces ("no FORMAT specifier found"): every length reads back."""
+    rgb = np.full((4, 4, 3), 50.0)
+    path = images.write_hdr(tmp_path / "a.hdr", rgb, command="x" * length)
+    back = images.read_image(path)
+    np.testing.assert_allclose(back.rgb, rgb, rtol=0.01)
+    assert back.metadata["header"][1].strip() == "x" * length
+
+
 def test_exposure_lines_accumulate(tmp_path):
     path = tmp_path / "two.hdr"
     path.write_bytes(b"#?RADIANCE\nEXPOSURE=2\npfilt\nEXPOSURE=1.5\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 1\n"
