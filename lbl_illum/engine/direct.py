@@ -184,10 +184,9 @@ class DirectLight:
         use = np.flatnonzero(f * cos_s > 0.0)
         if len(use):
             T = self.transmittance(self.tracer.offset(P[use], Ng[use]), s[use])
-            L[use] = (self.sun.direct_normal_illuminance * f[use] * cos_s[use])[:, None] * T
-            metal = mats.metallic[mat[use]]
-            if metal.any():                    # a metal's lobe has its colour C (Radiance's normal.c)
-                L[use[metal]] *= mats.specular_colour(mat[use[metal]])
+            # the lobe's colour: 1 for plastic, C for metal (Radiance's normal.c)
+            L[use] = (self.sun.direct_normal_illuminance * f[use] * cos_s[use])[:, None] * T \
+                * mats.specular_colour(mat[use])
         return L
 
     def _sun_transmittance(self, origins, normals, cut, samples, rng, stratified=False):

@@ -420,7 +420,7 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
 
     coords, lines, names, owners = [], [], [], []
     quadric_tris: list[tuple[str, np.ndarray | int]] = []
-    laterals: list[RadPrimitive] = []
+    laterals: list[tuple[str, tuple]] = []      # (kind, (p0, p1, r0, r1)) of each
     skipped: dict[str, int] = {}
     order: dict[str, None] = {}
     for p in prims:
@@ -441,9 +441,10 @@ def rad_surfaces(prims: list[RadPrimitive], where: str, scale: float = 1.0, warn
                 raise InputError(f"{where}: line {p.line}: {p.kind} '{p.name}': needs {_REAL_COUNTS[p.kind][0]} "
                                  f"reals, got {len(p.reals)}")
             if p.kind in LATERAL_TYPES:                 # tessellated all at once below
-                if _lateral_arguments(p, where) is not None:
+                arguments = _lateral_arguments(p, where)
+                if arguments is not None:
                     quadric_tris.append((p.modifier, len(laterals)))
-                    laterals.append(p)
+                    laterals.append((p.kind, arguments))
                     order.setdefault(p.modifier)
                 continue
             tri = _quadric(p, where)
@@ -511,9 +512,9 @@ def _lateral_arguments(p: RadPrimitive, where: str):
     return p0, p1, r0, r1
 
 
-def _lateral_surfaces(prims: list[RadPrimitive]) -> list[np.ndarray]:
+def _lateral_surfaces(prims: list[tuple[str, tuple]]) -> list[np.ndarray]:
     """(m, 3, 3) triangles of each (non-degenerate) cylinder, tube, cone or cup of
-    ``prims``, all tessellated at once: the lateral surface between two :data:`SEGMENTS`-gons
+    ``prims``, (type, :func:`_lateral_arguments`) each, all tessellated at once: the lateral surface between two :data:`SEGMENTS`-gons
     whose circumradii are k r0 and k r1, k first making the n-gons' perimeters the circles'
     and then solved by four secant steps so that the triangles' area equals the true
     surface's, π (r0 + r1) √(L² + (r1 − r0)²).  Zero-area triangles (at a cone's apex) are
@@ -522,7 +523,7 @@ def _lateral_surfaces(prims: list[RadPrimitive]) -> list[np.ndarray]:
 
     if not prims:
         return []
-    args = [_lateral_arguments(p, "") for p in prims]
+    args = [a for _, a in prims]
     p0 = np.array([a[0] for a in args])
     p1 = np.array([a[1] for a in args])
     r0 = np.array([a[2] for a in args], np.float64)
@@ -554,7 +555,7 @@ def _lateral_surfaces(prims: list[RadPrimitive]) -> list[np.ndarray]:
             k = np.where(active, k + (exact - area) / slope, k)
     tri = lateral(k)
     keep = twice_areas(tri) > 0
-    inward = np.array([p.kind in ("tube", "cup") for p in prims])
+    inward = np.array([kind in ("tube", "cup") for kind, _ in prims])
     return [tri[i][keep[i]][:, [0, 2, 1]] if inward[i] else tri[i][keep[i]] for i in range(len(prims))]
 
 
