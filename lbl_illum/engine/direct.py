@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene.materials import LIGHT, MaterialTable, ward_brdf
+from .gather import rows as take
 from .emitters import LightSurfaces
 from .luminaires import LuminaireLight
 from .raycast import Tracer, through_panes
@@ -137,13 +138,14 @@ class DirectLight:
                 if len(lit) == 0:
                     continue
                 cut = cut | (cos[lit] < SUN_SIN_HALF_ANGLE)
-                T, mixed = self._sun_transmittance(origins[lit], shading_normals[lit], cut, light_samples, rng,
+                o_lit, n_lit = take(origins, lit), take(shading_normals, lit)
+                T, mixed = self._sun_transmittance(o_lit, n_lit, cut, light_samples, rng,
                                                    stratified=light_samples > 1)
                 part = np.flatnonzero(mixed) if light_samples > 1 else ()
                 if len(part):
                     # a penumbra: some of the stratified rays were blocked and some not; the
                     # estimate is replaced by one of PENUMBRA_SAMPLES stratified rays
-                    T[part] = self._sun_transmittance(origins[lit][part], shading_normals[lit][part], cut[part],
+                    T[part] = self._sun_transmittance(take(o_lit, part), take(n_lit, part), cut[part],
                                                       max(PENUMBRA_SAMPLES, light_samples), rng, stratified=True)[0]
                 E[lit] += self.sun.direct_normal_illuminance * np.where(cut, 1.0, cos[lit])[:, None] * T
             if self.mirrors is not None:

@@ -57,6 +57,7 @@ from .cache import IrradianceCache, LevelRecords
 from .compiled import finish_first_run
 from .context import LightingContext
 from .fingerprint import record_settings, scene_fingerprint
+from .gather import rows as take
 from .gradients import irradiance_gradients, limit_gradients
 from .hemisphere import cell_counts, cosine_directions, stratified_directions
 from ..scene.materials import russian_roulette
@@ -189,10 +190,12 @@ class _Queries:
         return len(self.P)
 
     def take(self, index) -> "_Queries":
-        """The queries ``index`` (a slice or an index array)."""
+        """The queries ``index`` (a slice or an integer index array)."""
         def part(a):
-            return None if a is None else a[index]
-        return _Queries(self.P[index], self.Ns[index], self.Ng[index], part(self.origins), part(self.importance))
+            if a is None:
+                return None
+            return a[index] if isinstance(index, slice) or a.ndim == 1 else take(a, index)
+        return _Queries(part(self.P), part(self.Ns), part(self.Ng), part(self.origins), part(self.importance))
 
 
 @dataclass
@@ -468,8 +471,9 @@ class Integrator:
             pending.ray_dir.append(dirs.astype(np.float32))
             pending.cells = (m, n)
         if n_p:
-            p_known, p_hits, p_owner = portal_samples(self.context, P[inside], Ns[inside], Ng[inside], S, n_p,
-                                                      rng, base[inside], escapes=dc is not None)
+            p_known, p_hits, p_owner = portal_samples(self.context, take(P, inside), take(Ns, inside),
+                                                      take(Ng, inside), S, n_p, rng, take(base, inside),
+                                                      escapes=dc is not None)
             known[inside] += p_known
             if dc is not None:
                 dc.add_sky(pending, first + inside[p_hits["sky_owner"]], p_hits["sky_dir"], p_hits["sky_weight"])
@@ -574,7 +578,7 @@ class Integrator:
             todo = np.arange(nq)
         stats.cache_hits += nq - len(todo)
         # the uncovered queries, compacted after every pass
-        tP, tN = P[todo], Ns[todo]
+        tP, tN = take(P, todo), take(Ns, todo)
         band = distance_bands(tP, *run.roi, run.max_spacing)
         cell = 2.0 * lv.accuracy * run.max_spacing
         passes = 0
@@ -584,7 +588,7 @@ class Integrator:
                 local = np.arange(len(todo))
             else:
                 local = pick_per_cell(tP, tN, band, cell)
-            pP, pN = tP[local], tN[local]
+            pP, pN = take(tP, local), take(tN, local)
             R, W, leak = self._trace_records(k, q.take(todo[local]), pending, lv.count, run)
             pZ = zone[todo[local]]
             pending.records.append(lv.add(pP, pN, R, W=W, leak=leak, zone=pZ))
@@ -597,7 +601,7 @@ class Integrator:
                                      anisotropic=lv.anisotropic)
                 fresh.add(pP, pN, R, W=W, leak=leak, zone=pZ)
                 idx = np.flatnonzero(keep)
-                keep[idx[fresh.covers(tP[idx], tN[idx], zone[todo[idx]])]] = False
+                keep[idx[fresh.covers(take(tP, idx), take(tN, idx), zone[todo[idx]])]] = False
             todo, tP, tN, band = _compact(keep, todo, tP, tN, band)
             cell *= 0.5
             self._tick(run)
@@ -678,7 +682,8 @@ class Integrator:
             for start in range(0, r, per):
                 part = slice(start, start + per)
                 rec = records[part]
-                rot, trans = irradiance_gradients(lv.N[rec].astype(np.float64), dirs[part], ray_L[part], ray_t[part])
+                rot, trans = irradiance_gradients(take(lv.N, rec).astype(np.float64), dirs[part], ray_L[part],
+                                                  ray_t[part])
                 lv.Gr[rec], lv.Gt[rec] = limit_gradients(
                     lv.E[rec], rot, trans, lv.accuracy * lv.R[rec].astype(np.float64), lv.accuracy)
 

@@ -47,6 +47,7 @@ from typing import Protocol
 import numpy as np
 
 from .context import LightingContext
+from .gather import rows as take
 from .raycast import Hits
 from ..photometry import luminance
 from ..scene.materials import GLASS, LIGHT, PLASTIC, PLASTIC_BRANCH_LIMIT, russian_roulette
@@ -193,7 +194,8 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             if portal_weights is not None:
                 keep = portal_weights.first_hit(ray, o, d, hits)
                 if keep is not None:
-                    ray, o, d, through = ray[keep], o[keep], d[keep], through[keep]
+                    keep = np.flatnonzero(keep)
+                    ray, o, d, through = ray[keep], take(o, keep), take(d, keep), take(through, keep)
                     reflected, sun_done = reflected[keep], sun_done[keep]
                     hits = Hits(hits.t[keep], hits.prim[keep])
                     reached, escaped = hits.hit, ~hits.hit
@@ -209,14 +211,15 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
         # -- escaped to the sky
         esc = np.flatnonzero(escaped)
         if len(esc):
-            L = sky.luminance(d[esc])
+            d_esc = take(d, esc)
+            L = sky.luminance(d_esc)
             if policy.sun_disk and sun is not None:
-                L[sun.within_disk(d[esc]) & ~sun_done[esc]] += sun.luminance
-            _add(radiance, ray[esc], through[esc] * L, split)
+                L[sun.within_disk(d_esc) & ~sun_done[esc]] += sun.luminance
+            _add(radiance, ray[esc], take(through, esc) * L, split)
             if escapes:
                 out["sky_ray"].append(ray[esc])
-                out["sky_dir"].append(d[esc])
-                out["sky_through"].append(through[esc])
+                out["sky_dir"].append(d_esc)
+                out["sky_through"].append(take(through, esc))
         hit = np.flatnonzero(reached)
         if len(hit) == 0:
             break
@@ -227,13 +230,14 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
         dif = np.flatnonzero(context.diffuse_reflector[mat])
         if len(dif):
             out["ray"].append(ray[hit[dif]])
-            out["P"].append(P[dif])
-            out["Ns"].append(Ns[dif])
-            out["Ng"].append(Ng[dif])
-            weight = context.rho_over_pi[mat[dif]]
+            Ns_dif = take(Ns, dif)
+            out["P"].append(take(P, dif))
+            out["Ns"].append(Ns_dif)
+            out["Ng"].append(take(Ng, dif))
+            weight = take(context.rho_over_pi, mat[dif])
             if context.plastic_fresnel:           # polished plastic: ρ_d(θ) = (1 − ρ_s(θ)) C
-                weight = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", d[hit[dif]], Ns[dif])) / np.pi
-            out["weight"].append(weight if unit else through[hit[dif]] * weight)
+                weight = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", take(d, hit[dif]), Ns_dif)) / np.pi
+            out["weight"].append(weight if unit else take(through, hit[dif]) * weight)
         # -- diffuse transmission: the far side's irradiance, seen through the surface
         #    (translucent: L = ρ E_near/π + τ E_far/π; the far side's own records hold E_far)
         back = np.flatnonzero(context.diffuse_transmitter[mat])
@@ -264,13 +268,13 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
         s_mat = mat[spec]
         step = _split if split else _choose
         rows, side, new_d, new_through, was_reflected, transmitted = step(
-            mats, policy, d[s_hit], Ns[spec], Ng[spec], s_mat, through[s_hit], rng)
+            mats, policy, take(d, s_hit), take(Ns, spec), take(Ng, spec), s_mat, take(through, s_hit), rng)
         if portal_weights is not None and depth == 0 and context.portals is not None:
             portal = transmitted[mats.portal[s_mat[transmitted]]]
             if len(portal):
                 portal_weights.through_portal(ray, d, hits, s_hit[portal])
         unit = False
-        o = tracer.offset(P[spec][rows], side)
+        o = tracer.offset(take(P, spec[rows]), side)
         d = new_d
         sun_done = np.where(was_reflected, mats.glossy[s_mat[rows]], sun_done[s_hit][rows])
         reflected = reflected[s_hit][rows] | was_reflected
@@ -311,7 +315,7 @@ def _choose(mats, policy: PathPolicy, d, Ns, Ng, mat, through, rng):
     if len(weak):
         alive[weak], new_through[weak] = russian_roulette(new_through[weak], rng, policy.roulette)
     rows = np.flatnonzero(alive)
-    return rows, side[rows], new_d[rows], new_through[rows], ~transmit[rows], np.flatnonzero(transmit)
+    return rows, take(side, rows), take(new_d, rows), take(new_through, rows), ~transmit[rows], np.flatnonzero(transmit)
 
 
 def _split(mats, policy: PathPolicy, d, Ns, Ng, mat, through, rng):

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .context import LightingContext
+from .gather import rows as take
 from .paths import HEMISPHERE, MAX_SPECULAR_DEPTH, follow_paths
 from .raycast import Hits, step_past
 
@@ -114,7 +115,7 @@ def portal_density(context: LightingContext, directions, t, prim=None, origins=N
         glass = np.flatnonzero(k >= 0)
         if len(glass):
             kk = k[glass]
-            cos_p = np.abs(np.einsum("ij,ij->i", portals.normals[kk], directions[glass]))
+            cos_p = np.abs(np.einsum("ij,ij->i", take(portals.normals, kk), take(directions, glass)))
             density[glass] = portals.pdf_area(kk) * t[glass] ** 2 / np.maximum(cos_p, 1e-300)
     if origins is None or context.openings is None or len(directions) == 0:
         return density
@@ -123,8 +124,8 @@ def portal_density(context: LightingContext, directions, t, prim=None, origins=N
     d, tmax, start = directions, np.asarray(t, np.float64), np.zeros(len(directions))
     for _ in range(MAX_SPECULAR_DEPTH):
         hits = context.openings.intersect(o, d)
-        crossed = hits.t < tmax
-        live, o, d, tmax, start, tt, prim_o = (live[crossed], o[crossed], d[crossed], tmax[crossed],
+        crossed = np.flatnonzero(hits.t < tmax)
+        live, o, d, tmax, start, tt, prim_o = (live[crossed], take(o, crossed), take(d, crossed), tmax[crossed],
                                                start[crossed], hits.t[crossed], hits.prim[crossed])
         if len(live) == 0:
             break
@@ -172,7 +173,7 @@ class PortalBalanceWeights:
         if self.reach is not None:
             keep = hits.t > self.reach
             self.weight[~keep] = 0.0
-            ray, origins, directions = ray[keep], origins[keep], directions[keep]
+            ray, origins, directions = ray[keep], take(origins, keep), take(directions, keep)
             hits = Hits(hits.t[keep], hits.prim[keep])
         self.p_open = portal_density(self.context, directions, hits.t, origins=origins)
         density = self.p_open
@@ -180,15 +181,15 @@ class PortalBalanceWeights:
         sheet = sheet[self.context.translucent_portal[hits.prim[sheet]]]
         if len(sheet):              # a translucent portal ends the ray on both its faces
             density = density.copy()
-            density[sheet] += portal_density(self.context, directions[sheet], hits.t[sheet], prim=hits.prim[sheet])
-        self.weight[ray] = hemisphere_weight(self.normals[ray], directions, density, self.S, self.n_p[ray])
+            density[sheet] += portal_density(self.context, take(directions, sheet), hits.t[sheet], prim=hits.prim[sheet])
+        self.weight[ray] = hemisphere_weight(take(self.normals, ray), directions, density, self.S, self.n_p[ray])
         return keep
 
     def through_portal(self, ray, directions, hits, rows):
-        d = directions[rows]
+        d = take(directions, rows)
         density = self.p_open[rows] + portal_density(self.context, d, hits.t[rows], prim=hits.prim[rows])
         r = ray[rows]
-        self.weight[r] = hemisphere_weight(self.normals[r], d, density, self.S, self.n_p[r])
+        self.weight[r] = hemisphere_weight(take(self.normals, r), d, density, self.S, self.n_p[r])
 
 
 def trace_hemisphere_rays(context: LightingContext, origins, directions, rng, through=None, portal_mis=None,
@@ -264,7 +265,7 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
     w = x - o
     dist = np.linalg.norm(w, axis=1)
     w /= np.maximum(dist, 1e-300)[:, None]
-    cos_r = np.einsum("ij,ij->i", Ns[owner], w)
+    cos_r = np.einsum("ij,ij->i", take(Ns, owner), w)
     usable = (cos_r > 0.0) & (dist > 0.0)
     target = context.portal_prim[tri]
     known = np.zeros((r, 3))
@@ -277,7 +278,7 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
             known[:, c] += np.bincount(owner[use], radiance[:, c] * weight, minlength=r)
         if len(p_hits["ray"]):
             parts.append({**{key: p_hits[key] for key in keys[:3]},
-                          "weight": p_hits["weight"] * weight[p_hits["ray"], None]})
+                          "weight": p_hits["weight"] * np.take(weight, p_hits["ray"])[:, None]})
             owners.append(owner[use][p_hits["ray"]])
         if escapes and len(p_hits["sky_ray"]):
             sky["sky_owner"].append(owner[use][p_hits["sky_ray"]])
@@ -287,13 +288,14 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
     # portal glass and translucent sheets: the triangle drawn on must be the first surface met
     use = np.flatnonzero(usable & (target >= 0))
     if len(use):
-        hits = tracer.intersect(o[use], w[use])
-        first = hits.prim == target[use]
+        hits = tracer.intersect(take(o, use), take(w, use))
+        first = np.flatnonzero(hits.prim == target[use])
         use = use[first]
         if len(use):
             sub = Hits(hits.t[first], hits.prim[first])
-            density = portal_density(context, w[use], sub.t, prim=sub.prim, origins=o[use])
-            weight = hemisphere_weight(Ns[owner[use]], w[use], density, S, n_p)
+            o_use, w_use = take(o, use), take(w, use)
+            density = portal_density(context, w_use, sub.t, prim=sub.prim, origins=o_use)
+            weight = hemisphere_weight(take(Ns, owner[use]), w_use, density, S, n_p)
             # a translucent sheet: the ray ends there, on the near face (ρ/π) and the far
             # face (τ/π), as any ray that meets it does (paths.py)
             sheet = context.translucent_portal[sub.prim]
@@ -304,18 +306,20 @@ def portal_samples(context: LightingContext, P, Ns, Ng, S, n_p, rng, origins=Non
             # glass: through the pane at τ(θ), on like any ray
             pane = ~sheet
             if pane.any():
+                pane = np.flatnonzero(pane)
                 use, weight, sub = use[pane], weight[pane], Hits(sub.t[pane], sub.prim[pane])
-                Pp, Ngp, _ = tracer.surface(o[use], w[use], sub, np.arange(len(use)))
-                cos_p = np.einsum("ij,ij->i", tracer.normals[sub.prim], w[use])
+                w_use = take(w_use, pane)
+                Pp, Ngp, _ = tracer.surface(take(o_use, pane), w_use, sub, np.arange(len(use)))
+                cos_p = np.einsum("ij,ij->i", take(tracer.normals, sub.prim), w_use)
                 tau = context.materials.glass_transmittance(context.scene.triangles.material[sub.prim], cos_p)
-                _, radiance, p_hits, _ = trace_hemisphere_rays(context, tracer.offset(Pp, -Ngp), w[use], rng,
+                _, radiance, p_hits, _ = trace_hemisphere_rays(context, tracer.offset(Pp, -Ngp), w_use, rng,
                                                                through=tau, escapes=escapes)
                 add(use, radiance, p_hits, weight)
     # openings: unobstructed up to the point drawn, then on like any ray
     use = np.flatnonzero(usable & (target < 0))
     if len(use):
-        _, radiance, p_hits, weight = trace_hemisphere_rays(context, o[use], w[use], rng,
-                                                            portal_mis=(Ns[owner[use]], S, n_p, dist[use]),
+        _, radiance, p_hits, weight = trace_hemisphere_rays(context, take(o, use), take(w, use), rng,
+                                                            portal_mis=(take(Ns, owner[use]), S, n_p, dist[use]),
                                                             escapes=escapes)
         add(use, radiance, p_hits, weight)
     if escapes:

@@ -33,6 +33,7 @@ from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
 from .compiled import RowKernel
+from .gather import rows as take
 from ..scene.geometry import SPHERE_MAX_DEVIATION, Triangles
 from ..scene.geometry import orthonormal_basis
 from ..scene.materials import GLASS
@@ -355,15 +356,16 @@ class Tracer:
         if self._glass.empty:
             return result
         live = np.flatnonzero(result[:, 0] > 0)
-        o = np.asarray(origins, dtype=np.float64)[live]
-        d = np.asarray(directions, dtype=np.float64)[live]
+        o = take(np.asarray(origins, dtype=np.float64), live)
+        d = take(np.asarray(directions, dtype=np.float64), live)
         tm = np.asarray(tmax, dtype=np.float64)[live]
         for _ in range(MAX_GLASS_LAYERS):
             if len(live) == 0:
                 break
             t, prim = self._glass.first_hit(o, d, tm)
-            crossed = prim >= 0
-            live, o, d, tm, t, prim = live[crossed], o[crossed], d[crossed], tm[crossed], t[crossed], prim[crossed]
+            crossed = np.flatnonzero(prim >= 0)
+            live, o, d = live[crossed], take(o, crossed), take(d, crossed)
+            tm, t, prim = tm[crossed], t[crossed], prim[crossed]
             result[live] *= self._glass_tau[prim]
             o, step = step_past(o, d, t, self.length_scale)
             tm = tm - step

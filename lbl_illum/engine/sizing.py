@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .context import LightingContext
+from .gather import rows as take
 from .gradients import irradiance_gradients
 from .hemisphere import orthonormal_basis
 from .hessian import MAX_ANISOTROPY, hessian_radii, irradiance_hessian, leak_sectors
@@ -153,10 +154,11 @@ class RecordSizing:
         limit = np.full(r, np.inf)
         if (~behind).any():
             out = np.flatnonzero(~behind)
-            sel = (np.repeat(~behind, m * n))
-            limit[out] = known_gradient_limit(Ns[out], dirs[sel], radiance[sel], first_t[sel], m, n)
+            sel = np.flatnonzero(np.repeat(~behind, m * n))
+            limit[out] = known_gradient_limit(take(Ns, out), take(dirs, sel), take(radiance, sel), first_t[sel], m, n)
         if behind.any():
-            terms[behind] = self.window_terms(P[behind], Ns[behind])
+            inside = np.flatnonzero(behind)
+            terms[inside] = self.window_terms(take(P, inside), take(Ns, inside))
             g = np.hypot(terms[behind, 1], terms[behind, 2])
             with np.errstate(divide="ignore", invalid="ignore"):
                 limit[behind] = np.where(g > 0, terms[behind, 0] / g, np.inf)
