@@ -129,11 +129,33 @@ def _add_report_options(p, thresholds: str, unit: str) -> None:
                    "screen (.png; pyvista)")
 
 
-def _build_parser() -> argparse.ArgumentParser:
+#: The commands, in the order ``--help`` lists them.
+COMMANDS = ("illuminance", "daylight-factor", "grid", "view", "render", "glare", "annual", "validate", "export",
+            "batch", "cache")
+
+
+def _build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The command line's parser; with ``only`` (a name of :data:`COMMANDS`) only that
+    command's sub-parser is built and only its modules imported (the others' argument
+    definitions import render, glare, annual, batch and the validation studies: 0.07 s of
+    every run), for a command line that names it."""
     parser = _Parser(prog="lbl-illum", description="Illuminance in daylit rooms by the irradiance cache of "
                      "Ward, Rubinstein & Clear (1988).")
     parser.add_argument("--version", action="version", version=f"lbl-illum {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    def wanted(name: str) -> bool:
+        return only is None or only == name
+
+    class _Commands:
+        """``add_parser`` of the sub-parsers for the wanted commands; a parser of its own,
+        attached to nothing, for the others."""
+
+        @staticmethod
+        def add_parser(name, **kwargs):
+            return subparsers.add_parser(name, **kwargs) if wanted(name) else _Parser(prog=name)
+
+    sub = _Commands()
     p = sub.add_parser("illuminance", help="illuminance at sensor points",
                        description="Compute the illuminance [lux] at the sensor points of a .pts file "
                        "(x y z nx ny nz per line, scene units): direct light plus diffuse "
@@ -208,24 +230,26 @@ def _build_parser() -> argparse.ArgumentParser:
     w.add_argument("--screenshot", metavar="PNG", help="write the view to this .png file instead of a window")
     w.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
-    from .render import add_render_arguments
     r = sub.add_parser("render", help="luminance image of a view (cd/m2) through the irradiance cache",
                        description="Render the luminance image of a Radiance view (cd/m2) through the "
                        "irradiance cache: .exr, .hdr (Radiance RGBE with VIEW= and EXPOSURE= headers) or .tif, "
                        "with an optional tone-mapped preview and false-colour image; see docs/rendering.md.  "
                        "Give the view as --view=\"-vtv -vp ...\" (with '=': it starts with a dash).",
                        epilog=QUALITY_HELP + preset_table(), formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_render_arguments(r)
+    if wanted("render"):
+        from .render import add_render_arguments
+        add_render_arguments(r)
     _add_quality_options(r)
 
-    from .glare import add_glare_arguments
-    add_glare_arguments(sub.add_parser("glare", help="glare of a 180 degree fisheye image: DGP, Ev, sources, DGI, UGR",
-                                       description="Glare figures of a 180 degree fisheye luminance image (-vta or "
-                                       "-vth, with its VIEW= line) as Radiance's evalglare computes them: vertical "
-                                       "illuminance, glare sources, position index, DGP (low-light corrected), DGI, "
-                                       "UGR and the EN 17037 class; see docs/glare.md."))
+    if wanted("glare"):
+        from .glare import add_glare_arguments
+        add_glare_arguments(subparsers.add_parser(
+            "glare", help="glare of a 180 degree fisheye image: DGP, Ev, sources, DGI, UGR",
+            description="Glare figures of a 180 degree fisheye luminance image (-vta or -vth, with its VIEW= line) "
+            "as Radiance's evalglare computes them: vertical illuminance, glare sources, position index, DGP "
+            "(low-light corrected), DGI, UGR and the EN 17037 class; see docs/glare.md."))
 
-    from .annual import ANNUAL_PRESET, add_annual_arguments
+    from .annual import ANNUAL_PRESET
     a = sub.add_parser("annual", help="a year of daylight at sensor points: DA, sDA, ASE, UDI, LEED, EN 17037",
                        description=textwrap.fill(
                            "Compute the illuminance at the sensor points for every hour of a weather file (8760 "
@@ -235,13 +259,15 @@ def _build_parser() -> argparse.ArgumentParser:
                            "direct_sun.npy (float32, points x 8760, lux), points.csv, summary.json and PNG plans; "
                            "see docs/annual.md.", 88),
                        epilog=QUALITY_HELP + preset_table(), formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_annual_arguments(a)
+    if wanted("annual"):
+        from .annual import add_annual_arguments
+        add_annual_arguments(a)
     _add_quality_options(a, ANNUAL_PRESET, text=(
         f"The preset (default '{ANNUAL_PRESET}') replaces the quality keys of the scene's [settings]; an option given "
         "here wins over both.  The defaults shown are the preset's."))
 
     try:
-        STUDIES = _studies().STUDIES
+        STUDIES = _studies().STUDIES if wanted("validate") else {}
     except InputError:        # said when the command is used
         STUDIES = {}
     v = sub.add_parser("validate", help="run a validation study and write its report",
@@ -274,14 +300,15 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="auto (default): each pane as its model says — Fresnel single panes as Radiance's glass, "
                         "double panes and constant panes as BRTDfunc; or every pane as glass, or as BRTDfunc")
     x.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary line")
-    from .batch import add_batch_arguments
-    add_batch_arguments(sub.add_parser(
-        "batch", help="many studies (scenes, variants, grids, views, weather files) on one cluster",
-        description=textwrap.fill(
-            "Run the studies of a batch file (TOML: [defaults] and [[study]] tables, each a run of illuminance, "
-            "daylight-factor, render or annual with that command's options; a scene may be a glob of variants) "
-            "one after the other on one cluster, with one progress display and one summary table.  Every study "
-            "is checked before any runs.  See docs/distributed.md.", 88)))
+    if wanted("batch"):
+        from .batch import add_batch_arguments
+        add_batch_arguments(sub.add_parser(
+            "batch", help="many studies (scenes, variants, grids, views, weather files) on one cluster",
+            description=textwrap.fill(
+                "Run the studies of a batch file (TOML: [defaults] and [[study]] tables, each a run of illuminance, "
+                "daylight-factor, render or annual with that command's options; a scene may be a glob of variants) "
+                "one after the other on one cluster, with one progress display and one summary table.  Every "
+                "study is checked before any runs.  See docs/distributed.md.", 88)))
 
     from .cache import add_cache_commands
 
@@ -820,7 +847,9 @@ def _no_collection_at_exit() -> None:
 
 def main(argv=None) -> int:
     _no_collection_at_exit()
-    parser = _build_parser()
+    words = sys.argv[1:] if argv is None else list(argv)
+    command = words[0] if words and words[0] in COMMANDS and words[0] != "batch" else None
+    parser = _build_parser(command)     # batch parses its studies with every command's parser
     try:
         args = parser.parse_args(argv)
         if args.command is None:

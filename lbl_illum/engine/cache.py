@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import os
 
-import numba
 import numpy as np
 
 from . import octree
+from .compiled import kernel_threads
 
 __all__ = ["LevelRecords", "IrradianceCache"]
 
@@ -250,7 +250,7 @@ class LevelRecords:
                 order = octree.query_order(P, self.node_center[0], self.node_half[0])
             else:
                 order = np.arange(n)
-            parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
+            parallel = n >= self.PARALLEL_MIN_QUERIES and kernel_threads() > 1
             octree.lookup(P, N, _zones(zone, n), order, layout, self._values, self.leak, gradients, self.anisotropic, self.accuracy,
                           out_E, out_w, out_n, parallel, taper)
         return out_E, out_w, out_n
@@ -272,7 +272,7 @@ class LevelRecords:
             layout = self.freeze()
             order = octree.query_order(P, self.node_center[0], self.node_half[0]) if n >= self.SORT_MIN_QUERIES \
                 else np.arange(n)
-            parallel = n >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
+            parallel = n >= self.PARALLEL_MIN_QUERIES and kernel_threads() > 1
             out_E, out_w, out_n = np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.int32)
             octree.lookup(P, N, _zones(zone, n), order, layout, self._values, self.leak, False, self.anisotropic,
                           self.accuracy, out_E, out_w, out_n, parallel, taper, pairs=(record, weight))
@@ -286,7 +286,7 @@ class LevelRecords:
         N = np.ascontiguousarray(N, np.float64).reshape(-1, 3)
         out = np.zeros(len(P), bool)
         if len(P) and self.count and self.accuracy > 0:
-            parallel = len(P) >= self.PARALLEL_MIN_QUERIES and numba.get_num_threads() > 1
+            parallel = len(P) >= self.PARALLEL_MIN_QUERIES and kernel_threads() > 1
             octree.covered(P, N, _zones(zone, len(P)), self.freeze(), self._values, self.leak, self.anisotropic, self.accuracy, out,
                            parallel)
         return out

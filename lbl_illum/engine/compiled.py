@@ -73,6 +73,19 @@ def nogil_kernel(func):
     return njit(cache=True, nogil=True)(func)
 
 
+def kernel_threads() -> int:
+    """Threads the kernels run on: ``numba.get_num_threads()`` (what ``numba.set_num_threads``
+    set, for the calling thread) once numba's threading layer runs, else
+    ``NUMBA_NUM_THREADS``.  Asking numba first launches that layer, which no kernel here
+    uses (they run on :func:`in_threads`'s pool): it imports multiprocessing's
+    synchronisation and loads a threading library, 0.03 s of every run."""
+    from numba.np.ufunc import parallel
+
+    if getattr(parallel, "_is_initialized", True):
+        return numba.get_num_threads()
+    return numba.config.NUMBA_NUM_THREADS
+
+
 def in_threads(n: int, pieces: int, call) -> None:
     """``call(lo, hi)`` for ``pieces`` consecutive ranges that cover items 0…n − 1
     (piece p is [p n / pieces, (p + 1) n / pieces), as a ``prange`` over blocks splits

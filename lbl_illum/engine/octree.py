@@ -46,11 +46,10 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import numba
 import numpy as np
 from numba import njit
 
-from .compiled import in_threads, nogil_kernel
+from .compiled import in_threads, kernel_threads, nogil_kernel
 from .hessian import LEAK_SECTORS
 
 __all__ = ["FRONT_TOLERANCE", "MAX_DEPTH", "MIN_ERROR", "LANES", "Layout", "insert_records", "freeze",
@@ -728,7 +727,7 @@ def covered(qP, qN, qZ, layout: Layout, V, leak, shaped, accuracy, out, parallel
     if not parallel:
         _covered_kernel(qP, qN, qZ, *shared, out)
         return
-    in_threads(len(qP), numba.get_num_threads(),
+    in_threads(len(qP), kernel_threads(),
                lambda lo, hi: _covered_kernel(qP[lo:hi], qN[lo:hi], qZ[lo:hi], *shared, out[lo:hi]))
 
 
@@ -775,7 +774,7 @@ def lookup(qP, qN, qZ, order, layout: Layout, V, leak, gradients, shaped, accura
         pairs = (np.zeros((0, 0), np.int32), np.zeros((0, 0)))
     # a few blocks per thread: each block allocates its own buffers (the list of
     # level-1 boxes is sized for all of them)
-    n_blocks = min(len(qP) // 256 + 1, 8 * numba.get_num_threads()) if parallel else 1
+    n_blocks = min(len(qP) // 256 + 1, 8 * kernel_threads()) if parallel else 1
     shared = (accuracy, bool(gradients), bool(shaped), bool(taper), V, leak, layout.perm, layout.pos, layout.nr, layout.box,
               layout.level_start, float(layout.packet_extent), out_E, out_w, out_n, *pairs)
     if n_blocks == 1:

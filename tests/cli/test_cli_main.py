@@ -1,5 +1,6 @@
 """The command line: outputs, summaries, cache reuse, and bad input (one line, exit 2, no output)."""
 
+import argparse
 import json
 import shutil
 import subprocess
@@ -560,3 +561,32 @@ def test_plan_options_checked_before_any_work(sphere_job, capsys, args, expect):
     code, _, err = run(["daylight-factor", SPHERE / "scene.toml", "--points", pts, "-o", out] + FAST + args, capsys)
     assert code == 2 and expect in err and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
+
+
+def _sub_help(parser, command: str) -> str:
+    """The help text of ``command``'s sub-parser (and of its own sub-commands)."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+    texts = [sub.format_help()]
+    for action in sub._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            texts += [p.format_help() for p in action.choices.values()]
+    return "\n".join(texts)
+
+
+def test_a_command_line_builds_only_its_commands_parser_and_the_same_one():
+    """main() builds the parser of the command it is given alone (the others' modules are
+    not imported); its options and help are those of the whole parser's."""
+    from lbl_illum.cli.main import COMMANDS, _build_parser
+
+    whole = _build_parser()
+    choices = next(a for a in whole._actions if isinstance(a, argparse._SubParsersAction)).choices
+    assert tuple(choices) == COMMANDS
+    for command in COMMANDS:
+        alone = _build_parser(command)
+        assert list(next(a for a in alone._actions if isinstance(a, argparse._SubParsersAction)).choices) == [command]
+        assert _sub_help(alone, command) == _sub_help(whole, command)
+    code = ("import sys; from lbl_illum.cli.main import _build_parser; _build_parser('illuminance'); "
+            "print(sorted(m for m in ('lbl_illum.cli.render', 'lbl_illum.cli.glare', 'lbl_illum.cli.batch', "
+            "'lbl_illum_studies') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

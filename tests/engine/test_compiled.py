@@ -1,4 +1,6 @@
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -99,3 +101,14 @@ def test_a_first_run_compiles_half_the_kernels_in_a_second_process(monkeypatch):
     assert calls[0][2].split(os.pathsep)[0] == str(Path(compiled.__file__).parents[2])
     compiled.finish_first_run()
     assert calls[1:] == [("compile", 0), ("wait", compiled.HELPER_TIMEOUT)] and not compiled._HELPER
+
+
+def test_kernel_threads_follow_numba_without_launching_its_threading_layer():
+    """Without set_num_threads, the kernels' thread count is NUMBA_NUM_THREADS and numba's
+    own threading layer stays unlaunched; after it, numba's count for the thread."""
+    code = ("import numba; from numba.np.ufunc import parallel; from lbl_illum.engine.compiled import kernel_threads; "
+            "a = kernel_threads(); launched = parallel._is_initialized; numba.set_num_threads(1); "
+            "print(a, launched, kernel_threads())")
+    env = dict(os.environ, NUMBA_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["2", "False", "1"]
