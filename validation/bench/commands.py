@@ -16,9 +16,12 @@ is taken from outside, start-up included:
 Python's bytecode cache is on, in a temporary folder (``PYTHONPYCACHEPREFIX``), as in
 an installed copy, even where ``PYTHONDONTWRITEBYTECODE`` is set (then every command
 compiles the package's 70 modules again, about 0.1 s more each), and it holds what a
-run imports before the first run (:data:`WARM_BYTECODE`: with that folder empty, numba,
-numpy and the standard library would be compiled too, 1.1 s that pip's install does
-once); ``--no-bytecode-cache`` leaves the environment as it is.
+run imports before the first run, as pip's install compiles every module once: the
+README's job is run once beforehand with numba's disk cache and the geometry cache in
+folders of their own, deleted after it (:func:`warm_bytecode`).  Importing only what a
+warm run imports was not enough: numba's compiler imports some 60 modules more when it
+compiles, and compiling their bytecode too added 4 s to the first run measured here.
+``--no-bytecode-cache`` leaves the environment as it is.
 
 Usage: ``python validation/bench/commands.py [--repeat N] [--out DIR] [--no-bytecode-cache]``
 (``--out`` writes ``commands.json``).  Nothing here is asserted: the figures go to the docs by hand, with
@@ -46,11 +49,17 @@ except ImportError:             # Windows: wall seconds only
 ROOT = Path(__file__).resolve().parents[2]
 OFFICE = ["examples/office/scene.toml", "--points", "examples/office/grid.pts"]
 VIEW = "--view=-vtv -vp 2 5.5 1.5 -vd 0 -1 -0.1 -vh 80 -vv 60"
-#: Imports what a run imports (the office's OBJ reader, numba's compiler), so that the
-#: bytecode cache holds it before the first run, as pip's install compiles it.
-WARM_BYTECODE = ("import numba, lbl_illum.cli.main, lbl_illum.engine.integrator; from lbl_illum import load_scene; "
-                 "load_scene('examples/office/scene.toml'); lbl_illum.cli.main._build_parser(); "
-                 "numba.njit(lambda x: x + 1)(1)")
+
+
+def warm_bytecode(env: dict, scratch: Path) -> None:
+    """Fill the bytecode cache of ``env`` with every module a first run imports, numba's
+    compiler included: the README's job, run once with numba's disk cache and the geometry
+    cache in folders of ``scratch`` that are deleted afterwards."""
+    kernels, geometry = scratch / "warm-numba", scratch / "warm-geometry"
+    subprocess.run([*_command(), "illuminance", *OFFICE, "-o", str(scratch / "warm.csv"), "--preset", "draft", "-q"],
+                   cwd=ROOT, check=True, env=dict(env, NUMBA_CACHE_DIR=str(kernels), LBL_ILLUM_CACHE_DIR=str(geometry)))
+    for folder in (kernels, geometry):
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def _command() -> list[str]:
@@ -96,8 +105,7 @@ def main(argv=None) -> int:
     try:
         rows["help"] = best(["--help"], 5, base)
         if not args.no_bytecode_cache:      # the bytecode an installed copy has of what a run imports
-            subprocess.run([sys.executable, "-c", WARM_BYTECODE], cwd=ROOT, check=True,
-                           env=dict(base, LBL_ILLUM_CACHE_DIR="off"))
+            warm_bytecode(base, out_dir)
         # first run: numba's kernels and the geometry cache not on disk yet
         cold = dict(base, NUMBA_CACHE_DIR=str(out_dir / "numba"), LBL_ILLUM_CACHE_DIR=str(out_dir / "geometry"))
         readme = ["illuminance", *OFFICE, "-o", str(out_dir / "results.csv")]
