@@ -4,19 +4,17 @@ Light is carried as linear RGB whose channels are photometric: a grey triple
 ``(L, L, L)`` has luminance ``L`` cd/m² and an irradiance triple ``(E, E, E)``
 has illuminance ``E`` lux.  The photometric value of any triple is its Rec. 709
 luminance ``Y = w_r R + w_g G + w_b B`` where ``(w_r, w_g, w_b)`` is the
-middle row of the ITU-R BT.709 RGB→XYZ matrix, taken from colour-science.
-
-Importing colour-science costs seconds, so the three weights are read from it
-once per installed colour-science version and remembered in the user's cache
-directory (:func:`user_cache_dir`).
+middle row of the ITU-R BT.709 RGB→XYZ matrix: the normalised primary matrix of
+SMPTE RP 177-1993 for the BT.709 primaries and the D65 white point, derived here as
+colour-science derives it (``colour.normalised_primary_matrix``), which the tests
+check bit for bit.  Importing colour-science for three numbers took 0.8 s of a run
+whose cache folder was empty (every first run).
 """
 
 from __future__ import annotations
 
-import json
 import os
 from functools import lru_cache
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -32,11 +30,15 @@ RADIANCE_WHITE_EFFICACY = 179.0
 #: sky Radiance renders is 179/203 of gensky's formula and the sun 179/208.
 RADIANCE_SKY_EFFICACY = 203.0
 RADIANCE_SUN_EFFICACY = 208.0
+#: ITU-R BT.709 chromaticities (x, y) of the red, green and blue primaries, and of the
+#: D65 white point.
+BT709_PRIMARIES = ((0.64, 0.33), (0.30, 0.60), (0.15, 0.06))
+BT709_WHITE = (0.3127, 0.3290)
 
 
 def user_cache_dir() -> Path | None:
-    """The folder of what lbl_illum keeps between runs (these weights, parsed geometry
-    files: :mod:`lbl_illum.scene.geometry_cache`): ``$LBL_ILLUM_CACHE_DIR``, else
+    """The folder of what lbl_illum keeps between runs (parsed geometry files:
+    :mod:`lbl_illum.scene.geometry_cache`): ``$LBL_ILLUM_CACHE_DIR``, else
     ``$XDG_CACHE_HOME/lbl_illum``, else ``~/.cache/lbl_illum``; None when
     ``LBL_ILLUM_CACHE_DIR=off`` (nothing kept)."""
     root = os.environ.get("LBL_ILLUM_CACHE_DIR")
@@ -46,40 +48,18 @@ def user_cache_dir() -> Path | None:
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lbl_illum"))
 
 
-def _cache_file() -> Path:
-    root = user_cache_dir()
-    if root is None:
-        raise OSError("the cache is off")
-    version = metadata.version("colour-science")
-    return root / f"bt709-luminance-weights-colour-{version}.json"
-
-
-def _weights_from_colour() -> np.ndarray:
-    import colour  # deferred: a slow import
-
-    return np.asarray(colour.RGB_COLOURSPACES["ITU-R BT.709"].matrix_RGB_to_XYZ[1], dtype=np.float64)
-
-
 @lru_cache(maxsize=1)
 def luminance_weights() -> np.ndarray:
-    """(3,) float: Rec. 709 luminance weights of linear RGB, from colour-science."""
-    try:
-        path = _cache_file()
-        weights = np.asarray(json.loads(path.read_text())["weights"], dtype=np.float64)
-        if weights.shape == (3,) and np.all(np.isfinite(weights)):
-            return weights
-    except (OSError, ValueError, KeyError, metadata.PackageNotFoundError):
-        pass
-    weights = _weights_from_colour()
-    try:
-        path = _cache_file()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(json.dumps({"weights": weights.tolist()}))
-        os.replace(tmp, path)
-    except OSError:
-        pass  # a read-only home only costs the slow import next time
-    return weights
+    """(3,) float: Rec. 709 luminance weights of linear RGB, the Y row of the normalised
+    primary matrix M = P diag(P⁻¹ W) (SMPTE RP 177-1993): P's columns the primaries'
+    (x, y, 1 − x − y), W the white point's XYZ with Y = 1 — the operations of
+    colour-science's ``normalised_primary_matrix``, in its order."""
+    xy = np.asarray(BT709_PRIMARIES, np.float64)
+    primaries = np.transpose(np.hstack([xy, (1.0 - xy[:, 0] - xy[:, 1])[:, None]]))
+    x, y = BT709_WHITE
+    white = np.array([x / y, 1.0, (1.0 - x - y) / y])
+    coefficients = np.diagflat(np.dot(np.linalg.inv(primaries), white))
+    return np.dot(primaries, coefficients)[1].copy()
 
 
 def luminance(rgb: np.ndarray) -> np.ndarray:
