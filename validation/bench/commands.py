@@ -18,10 +18,10 @@ an installed copy, even where ``PYTHONDONTWRITEBYTECODE`` is set (then every com
 compiles the package's 70 modules again, about 0.1 s more each), and it holds what a
 run imports before the first run, as pip's install compiles every module once: the
 README's job is run once beforehand with numba's disk cache and the geometry cache in
-folders of their own, deleted after it (:func:`warm_bytecode`).  Importing only what a
-warm run imports was not enough: numba's compiler imports some 60 modules more when it
-compiles, and compiling their bytecode too added 4 s to the first run measured here.
-``--no-bytecode-cache`` leaves the environment as it is.
+folders of their own, deleted after it (:func:`warm_bytecode`), so that whatever a
+first run imports has its bytecode, as after pip's install (a list of imports would
+miss what only a first run imports).  ``--no-bytecode-cache`` leaves the environment
+as it is.
 
 Usage: ``python validation/bench/commands.py [--repeat N] [--out DIR] [--no-bytecode-cache]``
 (``--out`` writes ``commands.json``).  Nothing here is asserted: the figures go to the docs by hand, with
