@@ -450,7 +450,12 @@ class Integrator:
         # only points behind the portals sample them (lbl_illum.engine.portal_sampling)
         path_level = k > 0 and samples == 1
         inside, n_p = (None, 0) if path_level else portal_sample_plan(self.context, P, S)
-        per_ray = np.repeat(np.where(np.isin(np.arange(r), inside), n_p, 0), S) if n_p else None
+        if n_p:
+            draws = np.zeros(r, np.int64)
+            draws[inside] = n_p
+            per_ray = np.repeat(draws, S)
+        else:
+            per_ray = None
         mis = (np.repeat(Ns, S, axis=0), S, per_ray) if n_p else None
         dc = self.coefficients
         first_t, radiance, hits, ray_mis = self.trace_paths(origins, dirs, rng, portal_mis=mis, escapes=dc is not None)

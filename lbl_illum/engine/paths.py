@@ -171,8 +171,13 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
     ray = np.arange(n)
     o = np.asarray(origins, np.float64)
     d = np.asarray(directions, np.float64)
-    unit = through is None          # every throughput is 1 until a specular event
-    through = np.ones((n, 3)) if unit else np.array(through, np.float64)
+    unit = through is None          # every throughput is 1 until a specular event (then None)
+    through = None if unit else np.array(through, np.float64)
+
+    def scaled(index, values):
+        """``values`` times the throughput of the rays ``index`` (no product while it is 1)."""
+        return values if unit else take(through, index) * values
+
     reflected = np.zeros(n, bool)   # a reflection happened on the way
     sun_done = np.zeros(n, bool)    # the sun's disk was taken by a highlight's shadow ray
     out = {k: [] for k in ("ray", "P", "Ns", "Ng", "weight", "sky_ray", "sky_dir", "sky_through")}
@@ -195,7 +200,8 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
                 keep = portal_weights.first_hit(ray, o, d, hits)
                 if keep is not None:
                     keep = np.flatnonzero(keep)
-                    ray, o, d, through = ray[keep], take(o, keep), take(d, keep), take(through, keep)
+                    ray, o, d = ray[keep], take(o, keep), take(d, keep)
+                    through = None if unit else take(through, keep)
                     reflected, sun_done = reflected[keep], sun_done[keep]
                     hits = Hits(hits.t[keep], hits.prim[keep])
                     reached, escaped = hits.hit, ~hits.hit
@@ -205,7 +211,7 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             limit = np.minimum(hits.t, clip) if depth == 0 and tmax is not None else hits.t
             seen, L = luminous.seen(o, d, limit, None if policy.emitters_always else reflected, tracer.length_scale)
             if len(seen):
-                _add(radiance, ray[seen], through[seen] * L, split)
+                _add(radiance, ray[seen], scaled(seen, L), split)
                 reached, escaped = reached.copy(), escaped.copy()
                 reached[seen] = escaped[seen] = False
         # -- escaped to the sky
@@ -215,11 +221,11 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             L = sky.luminance(d_esc)
             if policy.sun_disk and sun is not None:
                 L[sun.within_disk(d_esc) & ~sun_done[esc]] += sun.luminance
-            _add(radiance, ray[esc], take(through, esc) * L, split)
+            _add(radiance, ray[esc], scaled(esc, L), split)
             if escapes:
                 out["sky_ray"].append(ray[esc])
                 out["sky_dir"].append(d_esc)
-                out["sky_through"].append(take(through, esc))
+                out["sky_through"].append(np.ones((len(esc), 3)) if unit else take(through, esc))
         hit = np.flatnonzero(reached)
         if len(hit) == 0:
             break
@@ -237,7 +243,7 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             weight = take(context.rho_over_pi, mat[dif])
             if context.plastic_fresnel:           # polished plastic: ρ_d(θ) = (1 − ρ_s(θ)) C
                 weight = mats.diffuse_at(mat[dif], np.einsum("ij,ij->i", take(d, hit[dif]), Ns_dif)) / np.pi
-            out["weight"].append(weight if unit else take(through, hit[dif]) * weight)
+            out["weight"].append(scaled(hit[dif], weight))
         # -- diffuse transmission: the far side's irradiance, seen through the surface
         #    (translucent: L = ρ E_near/π + τ E_far/π; the far side's own records hold E_far)
         back = np.flatnonzero(context.diffuse_transmitter[mat])
@@ -247,19 +253,19 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
             out["Ns"].append(-Ns[back])
             out["Ng"].append(-Ng[back])
             weight = context.tau_over_pi[mat[back]]
-            out["weight"].append(weight if unit else through[hit[back]] * weight)
+            out["weight"].append(scaled(hit[back], weight))
         # -- emitters
         is_light = kind == LIGHT
         lit = np.flatnonzero(is_light if policy.emitters_always else is_light & reflected[hit])
         if len(lit):
-            _add(radiance, ray[hit[lit]], through[hit[lit]] * mats.luminance[mat[lit]], split)
+            _add(radiance, ray[hit[lit]], scaled(hit[lit], mats.luminance[mat[lit]]), split)
         # -- the sun's highlight on rough plastic, by a shadow ray (the lobe's continuation
         #    below does not count the sun's disk again)
         if context.sun_glossy:
             gl = np.flatnonzero(mats.glossy[mat])
             if len(gl):
-                _add(radiance, ray[hit[gl]], through[hit[gl]] * context.direct.sun_highlight(
-                    d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng), split)
+                _add(radiance, ray[hit[gl]], scaled(hit[gl], context.direct.sun_highlight(
+                    d[hit[gl]], P[gl], Ng[gl], Ns[gl], mat[gl], rng)), split)
         # -- specular events continue
         spec = np.flatnonzero(mats.continues[mat])
         if len(spec) == 0 or depth == MAX_SPECULAR_DEPTH:
@@ -268,7 +274,8 @@ def follow_paths(context: LightingContext, origins, directions, rng: np.random.G
         s_mat = mat[spec]
         step = _split if split else _choose
         rows, side, new_d, new_through, was_reflected, transmitted = step(
-            mats, policy, take(d, s_hit), take(Ns, spec), take(Ng, spec), s_mat, take(through, s_hit), rng)
+            mats, policy, take(d, s_hit), take(Ns, spec), take(Ng, spec), s_mat,
+            np.ones((len(s_hit), 3)) if unit else take(through, s_hit), rng)
         if portal_weights is not None and depth == 0 and context.portals is not None:
             portal = transmitted[mats.portal[s_mat[transmitted]]]
             if len(portal):

@@ -82,12 +82,15 @@ class PortalSet:
 
     def planes(self) -> tuple[np.ndarray, np.ndarray]:
         """The portals' distinct planes: (p, 3) outward unit normals and (p,) offsets d, a
-        point x lying behind a plane when n·x ≤ d (+ :attr:`tolerance`)."""
+        point x lying behind a plane when n·x ≤ d (+ :attr:`tolerance`).  Found once."""
+        if getattr(self, "_planes", None) is not None:
+            return self._planes
         d = np.einsum("ij,ij->i", self.outward, self.centre)
         key = np.column_stack([np.round(self.outward * 1e4), np.round(d * 1e4)]).astype(np.int64)
         _, first = np.unique(key, axis=0, return_index=True)
         first = np.sort(first)
-        return self.outward[first], d[first]
+        self._planes = (self.outward[first], d[first])
+        return self._planes
 
     def zone(self, points: np.ndarray) -> np.ndarray:
         """(n,) uint8: 1 for points behind every portal plane (inside the building's
