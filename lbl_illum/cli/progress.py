@@ -20,9 +20,9 @@ __all__ = ["ProgressBar", "LINE_SECONDS", "compile_notice"]
 #: Seconds between two plain progress lines (standard error not a terminal).
 LINE_SECONDS = 5.0
 #: What compiling the kernels adds to a first run [s]: the README command on 2 cores, first
-#: run against the next (``validation/bench/commands.py``: 22.4 s against 14.3 s at a load
-#: of 2, less on a quiet machine: :data:`lbl_illum.engine.compiled.FIRST_RUN`).
-COMPILE_SECONDS = 7
+#: run against the next (``validation/bench/commands.py``, docs/performance: 17.96 s against
+#: 12.88 s; 18.49 against 12.88 in another run; :data:`lbl_illum.engine.compiled.FIRST_RUN`).
+COMPILE_SECONDS = 6
 
 
 class ProgressBar:
