@@ -270,8 +270,12 @@ def start_first_run() -> None:
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
     try:
+        # started in the folder that holds this package: ``-c`` puts the working folder first
+        # on sys.path, and from a source checkout with the package installed (the README's
+        # first command) the helper would import the checkout and compile its kernels, not
+        # the installed ones the run looks up
         helper = subprocess.Popen([sys.executable, "-c", f"from {__name__} import compile_part; compile_part(1)"],
-                                  env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                  env=env, cwd=root, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL)
     except OSError:
         return

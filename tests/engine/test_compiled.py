@@ -76,7 +76,7 @@ def test_a_first_run_compiles_half_the_kernels_in_a_second_process(monkeypatch):
 
     class Helper:
         def __init__(self, command, env, **kwargs):
-            calls.append(("start", command, env["PYTHONPATH"]))
+            calls.append(("start", command, env["PYTHONPATH"], kwargs.get("cwd")))
 
         def wait(self, timeout=None):
             calls.append(("wait", timeout))
@@ -99,6 +99,9 @@ def test_a_first_run_compiles_half_the_kernels_in_a_second_process(monkeypatch):
     compiled.start_first_run()                        # once a process
     assert len(calls) == 1 and "compile_part(1)" in calls[0][1][-1]
     assert calls[0][2].split(os.pathsep)[0] == str(Path(compiled.__file__).parents[2])
+    # started beside this package: from a checkout's root with the package installed, a
+    # helper started there imported the checkout and compiled kernels the run never found
+    assert calls[0][3] == str(Path(compiled.__file__).parents[2])
     compiled.finish_first_run()
     assert calls[1:] == [("compile", 0), ("wait", compiled.HELPER_TIMEOUT)] and not compiled._HELPER
 
@@ -112,3 +115,19 @@ def test_kernel_threads_follow_numba_without_launching_its_threading_layer():
     env = dict(os.environ, NUMBA_NUM_THREADS="2")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
     assert out.split() == ["2", "False", "1"]
+
+
+def test_the_second_process_imports_the_package_of_the_run_whatever_the_working_folder(tmp_path):
+    """The helper's command, run where start_first_run starts it, finds this package even
+    when the working folder of the run holds another one (a source checkout)."""
+    decoy = tmp_path / "lbl_illum"
+    decoy.mkdir()
+    (decoy / "__init__.py").write_text("raise ImportError('the decoy')\n")
+    root = Path(compiled.__file__).parents[2]
+    code = "import lbl_illum.engine.compiled as c; print(c.__file__)"
+    env = dict(os.environ, PYTHONPATH=str(root))
+    wrong = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert wrong.returncode != 0 and "the decoy" in wrong.stderr       # what happened before
+    right = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True, text=True,
+                           check=True)
+    assert Path(right.stdout.strip()) == Path(compiled.__file__)
