@@ -23,7 +23,11 @@ first run imports has its bytecode, as after pip's install (a list of imports wo
 miss what only a first run imports).  ``--no-bytecode-cache`` leaves the environment
 as it is.
 
-Usage: ``python validation/bench/commands.py [--repeat N] [--out DIR] [--no-bytecode-cache]``
+``--install`` times a copy that pip installs into a virtual environment, run from the
+repository's root, as the README's first command does; by default the ``lbl-illum`` on
+PATH (an editable install times the checkout itself).
+
+Usage: ``python validation/bench/commands.py [--repeat N] [--out DIR] [--install] [--no-bytecode-cache]``
 (``--out`` writes ``commands.json``).  Nothing here is asserted: the figures go to the docs by hand, with
 the machine they were taken on.
 """
@@ -62,9 +66,29 @@ def warm_bytecode(env: dict, scratch: Path) -> None:
         shutil.rmtree(folder, ignore_errors=True)
 
 
+#: The command timed: set by ``--install`` to the copy it installs.
+COMMAND: list[str] = []
+
+
 def _command() -> list[str]:
+    if COMMAND:
+        return COMMAND
     script = shutil.which("lbl-illum")
     return [script] if script else [sys.executable, "-m", "lbl_illum"]
+
+
+def install_copy(folder: Path) -> list[str]:
+    """Install the repository as the README does (``pip install .``, without its
+    dependencies) into a virtual environment in ``folder`` that sees this Python's
+    packages; return its ``lbl-illum``.  Run from the repository's root, as the README's
+    command is, this is the case where the working folder holds a second copy of the
+    package (the checkout) beside the installed one."""
+    venv = folder / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    bin_dir = venv / ("Scripts" if os.name == "nt" else "bin")
+    subprocess.run([str(bin_dir / "python"), "-m", "pip", "install", "--quiet", "--no-deps", str(ROOT)], check=True,
+                   stdout=subprocess.DEVNULL)
+    return [str(bin_dir / "lbl-illum")]
 
 
 #: CPU seconds (user + system, the command's processes) of each timed run, by wall seconds.
@@ -93,6 +117,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=3, help="warm runs per command, best taken (default 3)")
     parser.add_argument("--out", type=Path, help="folder for commands.json")
+    parser.add_argument("--install", action="store_true",
+                        help="time a copy installed by pip into a virtual environment (default: the lbl-illum on PATH)")
     parser.add_argument("--no-bytecode-cache", action="store_true",
                         help="keep the environment's PYTHONDONTWRITEBYTECODE (default: a bytecode cache in a temporary folder)")
     args = parser.parse_args(argv)
@@ -103,6 +129,8 @@ def main(argv=None) -> int:
         base["PYTHONPYCACHEPREFIX"] = str(out_dir / "pycache")
     rows = {}
     try:
+        if args.install:
+            COMMAND[:] = install_copy(out_dir)
         rows["help"] = best(["--help"], 5, base)
         if not args.no_bytecode_cache:      # the bytecode an installed copy has of what a run imports
             warm_bytecode(base, out_dir)
@@ -132,6 +160,7 @@ def main(argv=None) -> int:
                               "processor": platform.processor() or platform.machine(),
                               "load": os.getloadavg() if hasattr(os, "getloadavg") else None},
                   "bytecode_cache": not args.no_bytecode_cache and "PYTHONDONTWRITEBYTECODE" not in base,
+                  "installed_copy": bool(args.install),
                   "seconds": {name: seconds for name, (seconds, _) in rows.items()},
                   "cpu_seconds": {name: CPU[seconds] for name, (seconds, _) in rows.items() if seconds in CPU},
                   "runs": {name: runs for name, (_, runs) in rows.items()}}
