@@ -533,7 +533,6 @@ def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", model
     """{entry index: (primitives, label)} of the entries that name Radiance files or
     Honeybee models (those appended to ``models``: their views and warnings)."""
     from .honeybee import HONEYBEE_SUFFIXES, read_honeybee
-    from .radfile import read_rad
 
     models = [] if models is None else models
 
@@ -549,6 +548,8 @@ def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", model
                 out[i] = (model.primitives, label)
                 models.append(model)
             else:
+                from .radfile import read_rad          # imported only for Radiance files
+
                 out[i] = (read_rad(base_dir / entry["file"], label), label)
     return out
 
@@ -671,10 +672,12 @@ def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: flo
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
     label = f"{label} {file}"
     parts = load_mesh_file(base_dir / file, label, scale, warnings)
-    from .radfile import modifier_definitions
+    definitions = {}
+    if radiance:                                       # the radfile module only for Radiance files
+        from .radfile import modifier_definitions
 
-    definitions = {name: (p, w) for prims_, w in (radiance or {}).values()
-                   for name, p in modifier_definitions(prims_).items()}
+        definitions = {name: (p, w) for prims_, w in radiance.values()
+                       for name, p in modifier_definitions(prims_).items()}
     vertices, material, matched = [], [], set()
     for part in parts:
         key = next((k for k in part.keys if k in mapped), None)
