@@ -571,6 +571,13 @@ class MaterialTable:
             self.index = np.full(m, GLASS_INDEX)
         if self.transmissivity is None:
             self.transmissivity = np.zeros((m, 3))
+        #: the kinds of Fresnel glazing, distinct (index n, panes) in ascending order, and
+        #: (m,) which of them each material is (-1: not Fresnel glass)
+        pairs = np.stack([self.index[self.fresnel], self.panes[self.fresnel]], axis=1)
+        kinds, which = np.unique(pairs, axis=0, return_inverse=True)
+        self.glazing_kinds = [(float(n), int(p)) for n, p in kinds]
+        self.glazing_kind = np.full(m, -1, np.int64)
+        self.glazing_kind[self.fresnel] = which.reshape(-1)
 
     @classmethod
     def from_materials(cls, materials: list[Material]) -> "MaterialTable":
@@ -621,10 +628,11 @@ class MaterialTable:
         sel = np.flatnonzero(self.fresnel[mat])
         if len(sel):
             cos_i = np.asarray(cos_i, np.float64)
-            groups = np.stack([self.index[mat[sel]], self.panes[mat[sel]]], axis=1)
-            for n, p in np.unique(groups, axis=0):          # one pass per kind of glazing
-                g = sel[(groups[:, 0] == n) & (groups[:, 1] == p)]
-                tau[g], rho[g] = glazing_optics(cos_i[g], self.transmissivity[mat[g]], float(n), int(p))
+            kind = self.glazing_kind[mat[sel]]
+            for k, (n, p) in enumerate(self.glazing_kinds):          # one pass per kind of glazing
+                g = sel if len(self.glazing_kinds) == 1 else sel[kind == k]
+                if len(g):
+                    tau[g], rho[g] = glazing_optics(cos_i[g], self.transmissivity[mat[g]], n, p)
         return tau, rho
 
     def glass_transmittance(self, mat, cos_i):

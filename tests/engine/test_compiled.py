@@ -131,3 +131,42 @@ def test_the_second_process_imports_the_package_of_the_run_whatever_the_working_
     right = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True, text=True,
                            check=True)
     assert Path(right.stdout.strip()) == Path(compiled.__file__)
+
+
+def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_alike():
+    """A new process loads this package's kernels from numba's disk cache without importing
+    numba's typing and lowering registries (0.1 s of every run), and the loaded kernel gives
+    what it gives in this process, where it was compiled or loaded as numba does."""
+    from lbl_illum.engine import placement
+
+    rng = np.random.default_rng(3)
+    key = rng.integers(0, 40, 500).astype(np.int64)
+    off = rng.random(500)
+    compiled._dispatcher("placement:_nearest_per_key").compile(compiled._argument_types("(int64[::1], float64[::1])"))
+    here = [a.tolist() for a in placement._nearest_per_key(key, off)]
+    code = ("import sys, json, numpy as np; from lbl_illum.engine import placement; "
+            f"rng = np.random.default_rng(3); key = rng.integers(0, 40, 500).astype(np.int64); off = rng.random(500); "
+            "out = [a.tolist() for a in placement._nearest_per_key(key, off)]; "
+            "print(json.dumps([out, 'numba.typed.typeddict' in sys.modules, 'numba.np.npyimpl' in sys.modules]))")
+    import json
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    there, typed_loaded, ufuncs_loaded = json.loads(out)
+    assert there == here
+    assert not typed_loaded and not ufuncs_loaded
+
+
+def test_kernels_of_other_packages_load_as_numba_loads_them(tmp_path):
+    """The light load is for this package's kernels only: another module's cached kernel,
+    in a process that imported this package, loads through numba's own path, which
+    registers the compiler's modules first."""
+    (tmp_path / "their_kernels.py").write_text(
+        "from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n")
+    code = ("import sys; import lbl_illum.engine.compiled; import their_kernels; "
+            "print(their_kernels.twice(1.5), 'numba.typed.typeddict' in sys.modules)")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(Path(compiled.__file__).parents[2])]),
+               NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    first = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    second = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert first.split() == second.split() == ["3.0", "True"]
+    assert list((tmp_path / "cache").rglob("*.nbi"))          # the second process loaded it from there
