@@ -16,6 +16,7 @@ one by one, ``numba:compile`` events).
 
 from __future__ import annotations
 
+import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
@@ -24,9 +25,9 @@ from numba import njit
 __all__ = ["PARALLEL_MIN", "RowKernel", "nogil_kernel", "in_threads"]
 
 
-def _skip_blas_probe() -> None:
-    """Import numba's numpy functions (:mod:`numba.np.arraymath`, which the first kernel
-    compiled or loaded from disk imports) without importing SciPy.
+def _without_blas_probe(run_import) -> None:
+    """Run ``run_import``, which imports numba's numpy functions (:mod:`numba.np.arraymath`),
+    without importing SciPy.
 
     That module asks at import whether BLAS is there by importing
     ``scipy.linalg.cython_blas``: 0.2 s of every run (SciPy's array-API layer clones
@@ -34,16 +35,14 @@ def _skip_blas_probe() -> None:
     ``np.dot`` that no kernel here calls.  Here it is answered by whether SciPy is
     installed; a kernel that does call linear algebra still imports SciPy when it is
     compiled (:func:`numba.np.linalg.ensure_blas`).  With another layout of numba than
-    the one expected, nothing is changed."""
+    the one expected, the import is run as it is."""
     import importlib.util
-    import sys
 
-    if "numba.np.arraymath" in sys.modules:
-        return
     try:
         from numba.np import linalg
         ensure_blas = linalg.ensure_blas
     except (ImportError, AttributeError):
+        run_import()
         return
 
     def scipy_installed():
@@ -52,17 +51,50 @@ def _skip_blas_probe() -> None:
 
     linalg.ensure_blas = scipy_installed
     try:
-        from numba.np import arraymath
+        run_import()
     finally:
         linalg.ensure_blas = ensure_blas
+    arraymath = sys.modules.get("numba.np.arraymath")
     if getattr(arraymath, "ensure_blas", None) is scipy_installed:
         arraymath.ensure_blas = ensure_blas
 
 
-_skip_blas_probe()
+class _ArraymathImport:
+    """An import hook, used once: whatever first imports :mod:`numba.np.arraymath`
+    (compiling any kernel; loading one whose code calls numba's own array functions; numba
+    loading another package's kernel) runs it under :func:`_without_blas_probe`.  A run
+    whose kernels are all on disk then does not import it at all (0.03 s), and none pays
+    for SciPy's import.  The module's own loader does the work; this one wraps it."""
+
+    name = "numba.np.arraymath"
+
+    @classmethod
+    def find_spec(cls, name, path=None, target=None):
+        from importlib.machinery import PathFinder
+
+        if name != cls.name:
+            return None
+        if cls in sys.meta_path:
+            sys.meta_path.remove(cls)
+        spec = PathFinder.find_spec(name, path, target)
+        if spec is not None and spec.loader is not None:
+            spec.loader = cls(spec.loader)
+        return spec
+
+    def __init__(self, loader):
+        self.loader = loader
+
+    def __getattr__(self, attr):                   # get_source, get_filename …: the module's own
+        return getattr(self.loader, attr)
+
+    def create_module(self, spec):
+        return self.loader.create_module(spec)
+
+    def exec_module(self, module):
+        _without_blas_probe(lambda: self.loader.exec_module(module))
 
 
-def _load_kernels_lightly() -> None:
+def _load_kernels_lightly() -> bool:
     """Load this package's kernels from numba's disk cache without first loading numba's
     whole compiler.
 
@@ -74,9 +106,9 @@ def _load_kernels_lightly() -> None:
     context is made) and the reference-counting runtime, which is started here.  The
     kernels here call nothing else (no hashing of strings, no parallel loops, whose
     symbols those modules or numba's threading layer register).  A kernel not in the
-    cache is compiled as before, and compiling refreshes the context itself.  Kernels
-    of other packages load as numba does; with another layout of numba than the one
-    expected, nothing is changed."""
+    cache is compiled as before, and compiling refreshes the context itself.  Kernels of
+    other packages load as numba does.  Returns whether the loader was installed: with
+    another layout of numba than the one expected, nothing is changed."""
     try:
         from numba.core import caching
         from numba.core.runtime import rtsys
@@ -84,9 +116,9 @@ def _load_kernels_lightly() -> None:
         numba_load = caching.Cache.load_overload
         caching.Cache._load_overload, caching.Cache._guard_against_spurious_io_errors  # noqa: B018
     except (ImportError, AttributeError):
-        return
+        return False
     if getattr(numba_load, "_lbl_illum", False):
-        return
+        return True
     ours = __name__.split(".")[0] + "."
 
     def load_overload(self, sig, target_context):
@@ -98,9 +130,12 @@ def _load_kernels_lightly() -> None:
 
     load_overload._lbl_illum = True
     caching.Cache.load_overload = load_overload
+    return True
 
 
 _load_kernels_lightly()
+if _ArraymathImport.name not in sys.modules and _ArraymathImport not in sys.meta_path:
+    sys.meta_path.insert(0, _ArraymathImport)
 
 #: Items (rays, queries) from which a kernel runs on every core.
 PARALLEL_MIN = 100_000

@@ -147,13 +147,14 @@ def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_
     code = ("import sys, json, numpy as np; from lbl_illum.engine import placement; "
             f"rng = np.random.default_rng(3); key = rng.integers(0, 40, 500).astype(np.int64); off = rng.random(500); "
             "out = [a.tolist() for a in placement._nearest_per_key(key, off)]; "
-            "print(json.dumps([out, 'numba.typed.typeddict' in sys.modules, 'numba.np.npyimpl' in sys.modules]))")
+            "print(json.dumps([out, 'numba.typed.typeddict' in sys.modules, 'numba.np.npyimpl' in sys.modules, "
+            "'numba.np.arraymath' in sys.modules]))")
     import json
 
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    there, typed_loaded, ufuncs_loaded = json.loads(out)
+    there, typed_loaded, ufuncs_loaded, numpy_functions_loaded = json.loads(out)
     assert there == here
-    assert not typed_loaded and not ufuncs_loaded
+    assert not typed_loaded and not ufuncs_loaded and not numpy_functions_loaded
 
 
 def test_kernels_of_other_packages_load_as_numba_loads_them(tmp_path):

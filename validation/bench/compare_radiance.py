@@ -34,8 +34,9 @@ and by how much?*
   ``validation/corpus_reference.py``); a case without one is skipped and listed.  Here
   both sides are what a user waits for: ours is the whole command
   ``python -m lbl_illum illuminance SCENE --points PTS -o OUT.csv FLAGS --stats S.json -q``
-  from start to exit (``CORPUS_ENGINE_LADDER``: the four presets, two explicit
-  ``--accuracy --samples --point-samples`` settings and pure Monte Carlo; one untimed
+  from start to exit (``CORPUS_ENGINE_LADDER``: the four presets, three explicit
+  ``--accuracy --samples --point-samples`` settings and pure Monte Carlo at the sample
+  counts of Radiance's ``-aa 0`` runs; one untimed
   run per case first), Radiance's is ``oconv`` plus ``rtrace -ab 11 …``
   (``RADIANCE_LADDERS["corpus"]``: five (-aa, -ad) pairs, ``-aa 0`` at three -ad).
   Compared at ``CORPUS_ERROR_LEVELS`` (5 %, 2 %, 1 %, 0.5 %); a run on corpus cases
@@ -374,7 +375,8 @@ def radiance_ladder(kind: str, cube: float, zone_size: float, quick: bool = Fals
 #: (accuracy, samples, point samples) below and above them (the command's defaults
 #: otherwise: gradients interpolation; CORPUS_BOUNCES bounces), pure Monte Carlo samples.
 CORPUS_ENGINE_LADDER = {"presets": ("draft", "low", "medium", "high"),
-                        "explicit": [(0.2, 64, 512), (0.08, 256, 4096)], "pure": (1024,)}
+                        "explicit": [(0.3, 64, 512), (0.2, 64, 512), (0.08, 256, 4096)],
+                        "pure": RADIANCE_LADDERS[CORPUS]["pure"]}      # Monte Carlo at the samples Radiance's -ad takes
 QUICK_CORPUS_ENGINE_LADDER = {"presets": ("draft", "medium"), "explicit": [], "pure": ()}
 #: Cheap settings of the other kinds run untimed before the first corpus case, so that no
 #: timed run compiles a kernel (numba's on-disk cache) whatever the first setting is.
