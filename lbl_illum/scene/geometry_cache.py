@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CACHED_SUFFIXES", "READER_VERSION", "cache_folder", "cache_key", "load", "store"]
+__all__ = ["CACHED_SUFFIXES", "READER_VERSION", "cache_folder", "cache_key", "kept_shape", "load", "store"]
 
 #: Formats whose geometry lies wholly in the one file.
 CACHED_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb")
@@ -101,3 +101,30 @@ def store(key: str | None, parts, warnings) -> None:
                 os.unlink(tmp)
     except OSError:
         return
+
+
+def kept_shape(name: str, make) -> np.ndarray:
+    """(k, 3, 3) triangles of a shape that ``make()`` builds alike every time (the unit
+    sphere of Radiance's ``sphere`` and ``bubble`` primitives, an icosphere from trimesh),
+    built once and kept in the cache folder like a geometry file: a scene with a sphere then
+    no longer imports trimesh on every run (0.8 s with SciPy's spatial module).  The key is
+    ``name``, lbl_illum's version, :data:`READER_VERSION` and trimesh's version, so a new
+    trimesh builds it again.  Without a cache folder, or one that cannot be read or
+    written, ``make()`` is called each time."""
+    from importlib import metadata
+
+    from .._version import __version__
+    from .geometry import MeshPart
+
+    try:
+        builder = metadata.version("trimesh")
+    except metadata.PackageNotFoundError:
+        builder = None
+    key = None if cache_folder() is None else hashlib.sha256(
+        json.dumps(["shape", name, __version__, READER_VERSION, builder]).encode()).hexdigest()
+    kept = load(key)
+    if kept is not None and len(kept[0]) == 1 and kept[0][0].vertices.ndim == 3:
+        return kept[0][0].vertices
+    triangles = np.ascontiguousarray(make(), np.float64)
+    store(key, [MeshPart(name, name, None, None, triangles)], [])
+    return triangles

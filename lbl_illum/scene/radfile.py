@@ -600,17 +600,25 @@ _SPHERE = None
 
 def _unit_sphere() -> np.ndarray:
     """(320, 3, 3) icosphere of :data:`SPHERE_LEVEL` subdivisions scaled to the unit sphere's
-    area (4π), outward winding."""
+    area (4π), outward winding; built by trimesh once, then kept between runs
+    (:func:`lbl_illum.scene.geometry_cache.kept_shape`)."""
     global _SPHERE
     if _SPHERE is None:
-        import trimesh
+        from .geometry_cache import kept_shape
 
-        mesh = trimesh.creation.icosphere(subdivisions=SPHERE_LEVEL, radius=1.0)
-        tri = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.faces)]
-        tri *= np.sqrt(4.0 * np.pi / _area(tri))
+        tri = kept_shape(f"unit-icosphere-{SPHERE_LEVEL}", _build_unit_sphere)
         tri.setflags(write=False)
         _SPHERE = tri
     return _SPHERE
+
+
+def _build_unit_sphere() -> np.ndarray:
+    import trimesh
+
+    mesh = trimesh.creation.icosphere(subdivisions=SPHERE_LEVEL, radius=1.0)
+    tri = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.faces)]
+    tri *= np.sqrt(4.0 * np.pi / _area(tri))
+    return tri
 
 
 # ---------------------------------------------------------------------------

@@ -115,3 +115,44 @@ def test_radiance_and_gltf_files_are_not_kept(tmp_path, cache_on):
         assert cache_key(tmp_path / name, "w", 1.0) is None
     (tmp_path / "room.obj").write_text(OBJ)
     assert cache_key(tmp_path / "room.obj", "w", 1.0) is not None
+
+
+def test_a_kept_shape_is_built_once_and_read_back_equal(cache_on, monkeypatch):
+    """kept_shape builds a shape once; a later call (another run) reads it back equal
+    without building it; another name is another entry; with the cache off it is built
+    every time."""
+    from lbl_illum.scene.geometry_cache import kept_shape
+
+    built = []
+
+    def make():
+        built.append(True)
+        return np.arange(18, dtype=np.float64).reshape(2, 3, 3) / 7.0
+
+    first = kept_shape("test-shape", make)
+    second = kept_shape("test-shape", make)
+    assert len(built) == 1 and np.array_equal(first, second) and second.shape == (2, 3, 3)
+    kept_shape("another-shape", make)
+    assert len(built) == 2
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", "off")
+    kept_shape("test-shape", make)
+    assert len(built) == 3
+
+
+def test_radiance_spheres_come_from_the_kept_icosphere_without_trimesh(cache_on):
+    """A Radiance sphere is tessellated from trimesh's icosphere the first time, and from the
+    kept copy afterwards (a new process does not import trimesh): the same bits."""
+    import subprocess
+    import sys
+
+    from lbl_illum.scene import radfile
+
+    code = ("import sys, numpy as np; from lbl_illum.scene import radfile; s = radfile._unit_sphere(); "
+            "print('trimesh' in sys.modules, s.shape, float(np.abs(s).sum()).hex())")
+    env = {**__import__("os").environ, "LBL_ILLUM_CACHE_DIR": str(cache_on.parent)}
+    first = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    again = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    built = radfile._build_unit_sphere()
+    assert first.stdout.split()[0] == "True" and again.stdout.split()[0] == "False"
+    assert first.stdout.split()[1:] == again.stdout.split()[1:] == \
+        ["(320,", "3,", "3)", float(np.abs(built).sum()).hex()]
