@@ -34,6 +34,8 @@ itself is refused in one line.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,8 +44,8 @@ import numpy as np
 from ..errors import InputError
 from ..photometry import RADIANCE_WHITE_EFFICACY
 
-__all__ = ["RadPrimitive", "read_rad", "xform_primitives", "rad_surfaces", "modifier_definitions", "material_tables",
-           "read_rad_surfaces", "material_name", "SURFACE_TYPES", "SEGMENTS", "SPHERE_LEVEL"]
+__all__ = ["RadPrimitive", "read_rad", "files_read", "xform_primitives", "rad_surfaces", "modifier_definitions",
+           "material_tables", "read_rad_surfaces", "material_name", "SURFACE_TYPES", "SEGMENTS", "SPHERE_LEVEL"]
 
 #: Radiance's surface types read here (the rest are skipped with a warning).
 SURFACE_TYPES = ("polygon", "sphere", "bubble", "cylinder", "tube", "cone", "cup", "ring")
@@ -75,6 +77,29 @@ MIXTURE_TYPES = frozenset(("mixfunc", "mixdata", "mixpict", "mixtext"))
 OTHER_SURFACES = frozenset(("source", "instance", "mesh"))
 _REAL_COUNTS = {"sphere": (4,), "bubble": (4,), "cylinder": (7,), "tube": (7,), "cone": (8,), "cup": (8,),
                 "ring": (8,)}
+
+
+#: The files :func:`read_rad` reads while :func:`files_read` records them (None for a
+#: command's output, which is not a file).
+_READS: ContextVar[list | None] = ContextVar("lbl_illum_radfile_reads", default=None)
+
+
+@contextmanager
+def files_read():
+    """Record, in the list this yields, every file :func:`read_rad` reads meanwhile (the
+    file itself, the files ``!xform`` includes, the OBJ a ``mesh`` is read through) and
+    None for the output of any other ``!`` command, whose program it does not read."""
+    token = _READS.set([])
+    try:
+        yield _READS.get()
+    finally:
+        _READS.reset(token)
+
+
+def _record(path: Path | None) -> None:
+    reads = _READS.get()
+    if reads is not None:
+        reads.append(path)
 
 
 @dataclass
@@ -109,6 +134,7 @@ def read_rad(path: str | Path, where: str, root: Path | None = None, _stack: tup
         text = path.read_bytes().decode("utf-8", errors="replace")
     except PermissionError:
         raise InputError(f"{where}: cannot read the file (permission denied)") from None
+    _record(path)
     root = path.parent if root is None else root
     stack = _stack + (path.resolve(),)
     out: list[RadPrimitive] = []
@@ -241,8 +267,10 @@ def _mesh_source(p: RadPrimitive, path: Path, root: Path, where: str) -> list[Ra
     source = next((f for f in (_find(str(compiled.with_suffix(s)), path, root) for s in (".obj", ".OBJ"))
                    if f is not None), None)
     if source is None:
+        _record(None)                                # an OBJ put there later would change it
         return [p]                                   # skipped, and counted, by rad_surfaces
     parts = load_mesh_file(source, f"{label}: {source.name}", 1.0)
+    _record(source)
     prims = []
     for part in parts:
         modifier = p.modifier if p.modifier != "void" else (part.material or part.group or "white")
@@ -396,6 +424,7 @@ def _run_command(argv: list[str], text: str, path: Path, root: Path, where: str)
     if run.returncode != 0:
         message = (run.stderr.strip().splitlines() or ["no message"])[0]
         raise InputError(f"{where}: the command '!{text[:60]}' failed: {message}")
+    _record(None)
     with tempfile.NamedTemporaryFile("w", suffix=".rad", delete=False) as tmp:
         tmp.write(run.stdout)
     try:

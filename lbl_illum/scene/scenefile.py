@@ -492,9 +492,15 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
     if not isinstance(entries, (list, tuple)):
         raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {show(entries)}")
     ids = {m.name: i for i, m in enumerate(materials)}
-    radiance = _radiance_files(entries, where, base_dir, units, models)
+    kept: dict = {}
+    radiance = _radiance_files(entries, where, base_dir, units, models, scale, kept)
     if primitives is not None:
         primitives += [p for prims, _ in radiance.values() for p in prims]
+    definitions = None
+    if radiance:
+        from .radfile import modifier_definitions
+
+        definitions = {name: (p, w) for prims, w in radiance.values() for name, p in modifier_definitions(prims).items()}
     chunks, centers, radii = [], [], []
     for i, entry in enumerate(entries):
         label = f"{where}: geometry[{i}]"
@@ -503,7 +509,7 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
         if "file" in entry and "shape" in entry:
             raise InputError(f"{label}: give either 'file' or 'shape', not both")
         if i in radiance:
-            chunk = _radiance_chunk(entry, label, scale, ids, materials, radiance, i, warnings)
+            chunk = _radiance_chunk(entry, label, scale, ids, materials, radiance, i, warnings, definitions, kept.get(i))
             if chunk is not None:
                 chunks.append(chunk)
         elif "file" in entry:
@@ -529,9 +535,25 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
 RADIANCE_SUFFIXES = (".rad", ".mat")
 
 
-def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", models: list | None = None) -> dict:
+@dataclass
+class _RadianceRead:
+    """How a Radiance file was read: its geometry-cache key, the files its reading read
+    (None: it came from the cache) and, from the cache, ``(parts, warnings)`` of its
+    surfaces."""
+
+    key: str | None
+    reads: list | None = None
+    surfaces: tuple | None = None
+
+
+def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", models: list | None = None,
+                    scale: float = 1.0, kept: dict | None = None) -> dict:
     """{entry index: (primitives, label)} of the entries that name Radiance files or
-    Honeybee models (those appended to ``models``: their views and warnings)."""
+    Honeybee models (those appended to ``models``: their views and warnings).  A Radiance
+    file read before at ``scale``, with every file it read unchanged, comes from the
+    geometry cache (:func:`lbl_illum.scene.geometry_cache.load_radiance`: its primitives
+    other than surfaces, and its surfaces); ``kept`` gets each Radiance entry's
+    :class:`_RadianceRead`."""
     from .honeybee import HONEYBEE_SUFFIXES, read_honeybee
 
     models = [] if models is None else models
@@ -548,19 +570,36 @@ def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", model
                 out[i] = (model.primitives, label)
                 models.append(model)
             else:
-                from .radfile import read_rad          # imported only for Radiance files
+                from . import geometry_cache
+                from .radfile import files_read, read_rad          # imported only for Radiance files
 
-                out[i] = (read_rad(base_dir / entry["file"], label), label)
+                path = base_dir / entry["file"]
+                key = geometry_cache.radiance_key(path, label, scale) if path.is_file() else None
+                found = geometry_cache.load_radiance(key)
+                if found is not None:
+                    out[i] = (found[0], label)
+                    read = _RadianceRead(key, None, found[1:])
+                else:
+                    with files_read() as reads:
+                        out[i] = (read_rad(path, label), label)
+                    read = _RadianceRead(key, reads)
+                if kept is not None:
+                    kept[i] = read
     return out
 
 
 def _radiance_chunk(entry, label: str, scale: float, ids: dict[str, int], materials: list[Material],
-                    radiance: dict, index: int, warnings: list[str]) -> _Chunk | None:
+                    radiance: dict, index: int, warnings: list[str], definitions: dict,
+                    read: _RadianceRead | None = None) -> _Chunk | None:
     """A Radiance-file entry: its surfaces by modifier, each modifier's material the one
     its ``materials`` mapping names, else the ``[materials]`` table of its name, else its
     own definition in the scene's Radiance files (made a material here), else the entry's
-    default ``material``.  A ``.mat`` file (definitions only) gives no chunk."""
-    from .radfile import material_name, rad_surfaces
+    default ``material``.  A ``.mat`` file (definitions only) gives no chunk.
+
+    ``definitions``: the modifiers of all the scene's Radiance files (name → (primitive,
+    where it was read)); ``read``: how the file was read (:class:`_RadianceRead`), its
+    surfaces when they came from the geometry cache, which they go to otherwise."""
+    from .radfile import SURFACE_TYPES, MESH_TRIANGLES, material_name, rad_surfaces
 
     prims, where = radiance[index]
     default = _material_id(entry["material"], label, ids) if "material" in entry else None
@@ -568,12 +607,21 @@ def _radiance_chunk(entry, label: str, scale: float, ids: dict[str, int], materi
     if not isinstance(mapping, Mapping):
         raise InputError(f"{label}: 'materials' must be a table of name = material, got {show(mapping)}")
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
-    parts = rad_surfaces(prims, where, scale, warnings)
+    if read is not None and read.surfaces is not None:
+        parts, notes = read.surfaces
+    else:
+        notes = []
+        parts = rad_surfaces(prims, where, scale, notes)
+        if parts and read is not None:
+            from .geometry_cache import store_radiance
+
+            store_radiance(read.key, read.reads, [p for p in prims if p.kind not in SURFACE_TYPES
+                                                  and p.kind != MESH_TRIANGLES], parts, notes)
+    warnings.extend(notes)
     if not parts:
         if Path(entry["file"]).suffix.lower() == ".mat" or any(p.kind != "polygon" for p in prims):
             return None
         raise InputError(f"{where}: the file contains no surfaces")
-    definitions = {p.name: (p, w) for prims_, w in radiance.values() for p in prims_}
     # a part is named by its surfaces' modifier; patterns and aliases lead to a material
     for part in parts:
         part.material = material_name(part.name, definitions)

@@ -107,7 +107,9 @@ def test_an_unwritable_cache_or_a_damaged_entry_costs_only_the_parse(tmp_path, m
     assert np.array_equal(again[0].vertices, parts[0].vertices)
 
 
-def test_radiance_and_gltf_files_are_not_kept(tmp_path, cache_on):
+def test_radiance_and_gltf_files_are_not_kept_as_single_files(tmp_path, cache_on):
+    """They read other files: glTF is not kept, Radiance files by the files they read
+    (below)."""
     from lbl_illum.scene.geometry_cache import cache_key
 
     for name in ("room.rad", "room.gltf"):
@@ -156,3 +158,80 @@ def test_radiance_spheres_come_from_the_kept_icosphere_without_trimesh(cache_on)
     assert first.stdout.split()[0] == "True" and again.stdout.split()[0] == "False"
     assert first.stdout.split()[1:] == again.stdout.split()[1:] == \
         ["(320,", "3,", "3)", float(np.abs(built).sum()).hex()]
+
+
+ROOM_RAD = """void plastic white 0 0 5 0.6 0.6 0.6 0 0
+void glass pane 0 0 3 0.8 0.8 0.8
+white polygon floor 0 0 12  0 0 0  4 0 0  4 5 0  0 5 0
+# a wall with a window hole drawn as a keyhole
+white polygon wall 0 0 30  0 0 0  0 0 3  4 0 3  4 0 0  3 0 1  3 0 2  1 0 2  1 0 1  3 0 1  4 0 0
+!xform -t 0 0 0.8 desk.rad
+white sphere lamp 0 0 4 2 2 2.5 0.1
+void light bulb 0 0 3 10 10 10
+"""
+DESK_RAD = """white polygon top 0 0 12  1 1 0  3 1 0  3 2 0  1 2 0
+"""
+
+
+def _radiance_scene(folder):
+    (folder / "room.rad").write_text(ROOM_RAD)
+    (folder / "desk.rad").write_text(DESK_RAD)
+    (folder / "scene.toml").write_text('[[geometry]]\nfile = "room.rad"\n\n[sky]\ntype = "cie-overcast"\n'
+                                        'horizontal_illuminance = 10000\n')
+    return folder / "scene.toml"
+
+
+def _scene_bits(scene):
+    tri = scene.triangles
+    return (tri.vertices.tobytes(), tri.material.tobytes(), repr(scene.materials), list(scene.warnings))
+
+
+def test_a_radiance_file_read_again_comes_from_the_cache_equal(tmp_path, cache_on, monkeypatch):
+    """The second load of a Radiance scene (a keyhole wall, an !xform include, a sphere, a
+    modifier used by none) neither parses nor triangulates, and gives the same triangles,
+    materials and warnings."""
+    from lbl_illum import load_scene
+    from lbl_illum.scene import radfile
+
+    path = _radiance_scene(tmp_path)
+    first = _scene_bits(load_scene(path))
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("read again")
+
+    monkeypatch.setattr(radfile, "read_rad", refuse)
+    monkeypatch.setattr(radfile, "rad_surfaces", refuse)
+    assert _scene_bits(load_scene(path)) == first
+    assert len(list(cache_on.glob("*.npz"))) == 1 + 1              # the room, and the kept unit sphere
+
+
+@pytest.mark.parametrize("edit", ["room.rad", "desk.rad"])
+def test_an_edited_radiance_file_or_include_is_read_again(tmp_path, cache_on, edit):
+    """Editing the file or a file its !xform includes makes the next load read it again
+    (the desk top, 0.8 m up, moved to 1.8 m shows), never the kept copy."""
+    from lbl_illum import load_scene
+
+    path = _radiance_scene(tmp_path)
+    load_scene(path)
+    target = tmp_path / edit
+    text = target.read_text()
+    target.write_text(text.replace("-t 0 0 0.8", "-t 0 0 1.8") if edit == "room.rad"
+                      else "white polygon top 0 0 12  1 1 1  3 1 1  3 2 1  1 2 1\n")
+    z = load_scene(path).triangles.vertices[..., 2]
+    assert np.isclose(z, 1.8).any() and not np.isclose(z, 0.8).any()
+
+
+def test_a_radiance_reading_that_ran_a_command_is_not_kept(tmp_path, cache_on):
+    """A file whose reading ran a program (its output is no file to check) is never kept."""
+    from lbl_illum.scene.geometry import MeshPart
+    from lbl_illum.scene.geometry_cache import load_radiance, radiance_key, store_radiance
+
+    rad = tmp_path / "room.rad"
+    rad.write_text(DESK_RAD)
+    key = radiance_key(rad, "w", 1.0)
+    part = MeshPart("white", "white", None, "white", np.zeros((1, 3, 3)))
+    store_radiance(key, [rad, None], [], [part], [])
+    assert load_radiance(key) is None
+    store_radiance(key, [rad], [], [part], ["a note"])
+    prims, parts, notes = load_radiance(key)
+    assert prims == [] and notes == ["a note"] and np.array_equal(parts[0].vertices, part.vertices)
