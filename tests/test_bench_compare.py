@@ -580,3 +580,15 @@ def test_merge_keeps_the_cases_a_run_does_not_measure(tiny_case, tmp_path, monke
     assert cr.merge_corpus_cases(path, args, {}, {}) == []                          # reference changed
     with pytest.raises(SystemExit):
         cr.parse_args(["--scenes", "office", "--merge"])
+
+
+def test_the_report_command_shows_no_machine_folders(tmp_path):
+    """An absolute --out inside a repository shows relative to its root in the report's
+    command; other paths show as given."""
+    repo = tmp_path / "clone"
+    (repo / "docs" / "performance").mkdir(parents=True)
+    (repo / "pyproject.toml").write_text("[project]\nname = 'x'\n")
+    assert cr.display_path(repo / "docs" / "performance") == Path("docs/performance")
+    assert cr.display_path(Path("docs/performance")) == Path("docs/performance")
+    outside = tmp_path / "elsewhere"
+    assert cr.display_path(outside) == outside

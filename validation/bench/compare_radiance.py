@@ -1711,8 +1711,21 @@ def parse_args(argv=None) -> argparse.Namespace:
         parser.exit(2, "compare_radiance: --merge: only corpus cases can be merged (--scenes corpus:NAME-SKY,...)\n")
     if args.triangles < 1000:
         parser.exit(2, "compare_radiance: --triangles must be >= 1000\n")
-    args.out_display = args.out
+    args.out_display = display_path(args.out)
     return args
+
+
+def display_path(path: Path) -> Path:
+    """``path`` as the report's command shows it: an absolute path inside a repository
+    (a folder with ``pyproject.toml`` above it) relative to that repository's root, so
+    that no machine's folders are written into a committed report; others as given."""
+    path = Path(path)
+    if not path.is_absolute():
+        return path
+    for root in path.parents:
+        if (root / "pyproject.toml").is_file():
+            return path.relative_to(root)
+    return path
 
 
 def list_ladders(args) -> None:
