@@ -94,7 +94,7 @@ class _ArraymathImport:
         _without_blas_probe(lambda: self.loader.exec_module(module))
 
 
-def _load_kernels_lightly() -> bool:
+def _load_kernels_lightly() -> None:
     """Load this package's kernels from numba's disk cache without first loading numba's
     whole compiler.
 
@@ -107,8 +107,8 @@ def _load_kernels_lightly() -> bool:
     kernels here call nothing else (no hashing of strings, no parallel loops, whose
     symbols those modules or numba's threading layer register).  A kernel not in the
     cache is compiled as before, and compiling refreshes the context itself.  Kernels of
-    other packages load as numba does.  Returns whether the loader was installed: with
-    another layout of numba than the one expected, nothing is changed."""
+    other packages load as numba does.  With another layout of numba than the one
+    expected, nothing is changed."""
     try:
         from numba.core import caching
         from numba.core.runtime import rtsys
@@ -116,9 +116,9 @@ def _load_kernels_lightly() -> bool:
         numba_load = caching.Cache.load_overload
         caching.Cache._load_overload, caching.Cache._guard_against_spurious_io_errors  # noqa: B018
     except (ImportError, AttributeError):
-        return False
+        return
     if getattr(numba_load, "_lbl_illum", False):
-        return True
+        return
     ours = __name__.split(".")[0] + "."
 
     def load_overload(self, sig, target_context):
@@ -130,7 +130,6 @@ def _load_kernels_lightly() -> bool:
 
     load_overload._lbl_illum = True
     caching.Cache.load_overload = load_overload
-    return True
 
 
 _load_kernels_lightly()

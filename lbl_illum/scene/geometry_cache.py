@@ -98,16 +98,16 @@ def _load_entry(key: str | None, check=None):
         return None
 
 
-def store(key: str | None, parts, warnings, **extra) -> None:
+def store(key: str | None, parts, warnings, meta: dict | None = None, arrays: dict | None = None) -> None:
     """Keep ``parts`` and the ``warnings`` their reading gave under ``key`` (quietly
-    nothing when the folder cannot be written).  ``extra``: ``meta`` (JSON) and arrays."""
+    nothing when the folder cannot be written), with more ``meta`` (JSON) and ``arrays``."""
     if key is None:
         return
     folder = cache_folder()
     meta = {"parts": [{"name": p.name, "node": p.node, "group": p.group, "material": p.material} for p in parts],
-            "warnings": list(warnings), **extra.pop("meta", {})}
-    arrays = {f"v{i}": np.ascontiguousarray(p.vertices, np.float64) for i, p in enumerate(parts)}
-    arrays.update(extra)
+            "warnings": list(warnings), **(meta or {})}
+    arrays = {**{f"v{i}": np.ascontiguousarray(p.vertices, np.float64) for i, p in enumerate(parts)},
+              **(arrays or {})}
     try:
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
@@ -207,5 +207,5 @@ def store_radiance(key: str | None, reads, primitives, parts, warnings) -> None:
     meta = {"reads": digests,
             "primitives": [[p.modifier, p.kind, p.name, list(p.strings), int(p.line)] for p in primitives]}
     reals = [np.asarray(p.reals, np.float64).reshape(-1) for p in primitives]
-    store(key, parts, warnings, meta=meta,
-          reals=np.concatenate(reals) if reals else np.zeros(0), counts=np.array([len(r) for r in reals], np.int64))
+    store(key, parts, warnings, meta=meta, arrays={"reals": np.concatenate(reals) if reals else np.zeros(0),
+                                                   "counts": np.array([len(r) for r in reals], np.int64)})

@@ -492,12 +492,12 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
     if not isinstance(entries, (list, tuple)):
         raise InputError(f"{where}: 'geometry' must be an array of tables ([[geometry]]), got {show(entries)}")
     ids = {m.name: i for i, m in enumerate(materials)}
-    kept: dict = {}
-    radiance = _radiance_files(entries, where, base_dir, units, models, scale, kept)
+    radiance, reads = _radiance_files(entries, where, base_dir, units, models, scale)
     if primitives is not None:
         primitives += [p for prims, _ in radiance.values() for p in prims]
-    definitions = None
-    if radiance:
+    # the modifiers of all the scene's Radiance files: name → (primitive, where it was read)
+    definitions = {}
+    if radiance:                                       # the radfile module only for Radiance files
         from .radfile import modifier_definitions
 
         definitions = {name: (p, w) for prims, w in radiance.values() for name, p in modifier_definitions(prims).items()}
@@ -509,11 +509,11 @@ def _geometry(entries: Any, where: str, base_dir: Path, scale: float, materials:
         if "file" in entry and "shape" in entry:
             raise InputError(f"{label}: give either 'file' or 'shape', not both")
         if i in radiance:
-            chunk = _radiance_chunk(entry, label, scale, ids, materials, radiance, i, warnings, definitions, kept.get(i))
+            chunk = _radiance_chunk(entry, label, scale, ids, materials, radiance, i, warnings, definitions, reads.get(i))
             if chunk is not None:
                 chunks.append(chunk)
         elif "file" in entry:
-            chunks.append(_file_chunk(entry, label, base_dir, scale, ids, warnings, materials, radiance))
+            chunks.append(_file_chunk(entry, label, base_dir, scale, ids, warnings, materials, definitions))
         elif "shape" in entry:
             chunk, shape = _shape_chunk(entry, label, scale, ids, len(centers))
             chunks.append(chunk)
@@ -547,18 +547,18 @@ class _RadianceRead:
 
 
 def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", models: list | None = None,
-                    scale: float = 1.0, kept: dict | None = None) -> dict:
-    """{entry index: (primitives, label)} of the entries that name Radiance files or
-    Honeybee models (those appended to ``models``: their views and warnings).  A Radiance
-    file read before at ``scale``, with every file it read unchanged, comes from the
-    geometry cache (:func:`lbl_illum.scene.geometry_cache.load_radiance`: its primitives
-    other than surfaces, and its surfaces); ``kept`` gets each Radiance entry's
-    :class:`_RadianceRead`."""
+                    scale: float = 1.0) -> tuple[dict, dict]:
+    """``({entry index: (primitives, label)}, {entry index: _RadianceRead})``: the entries
+    that name Radiance files or Honeybee models (those appended to ``models``: their views
+    and warnings), and how each Radiance file was read.  A Radiance file read before at
+    ``scale``, with every file it read unchanged, comes from the geometry cache
+    (:func:`lbl_illum.scene.geometry_cache.load_radiance`: its primitives other than
+    surfaces, and its surfaces)."""
     from .honeybee import HONEYBEE_SUFFIXES, read_honeybee
 
     models = [] if models is None else models
 
-    out = {}
+    out, how = {}, {}
     for i, entry in enumerate(entries):
         if isinstance(entry, Mapping) and isinstance(entry.get("file"), str) and "shape" not in entry \
                 and Path(entry["file"]).suffix.lower() in RADIANCE_SUFFIXES + HONEYBEE_SUFFIXES:
@@ -578,14 +578,12 @@ def _radiance_files(entries, where: str, base_dir: Path, units: str = "m", model
                 found = geometry_cache.load_radiance(key)
                 if found is not None:
                     out[i] = (found[0], label)
-                    read = _RadianceRead(key, None, found[1:])
+                    how[i] = _RadianceRead(key, None, found[1:])
                 else:
                     with files_read() as reads:
                         out[i] = (read_rad(path, label), label)
-                    read = _RadianceRead(key, reads)
-                if kept is not None:
-                    kept[i] = read
-    return out
+                    how[i] = _RadianceRead(key, reads)
+    return out, how
 
 
 def _radiance_chunk(entry, label: str, scale: float, ids: dict[str, int], materials: list[Material],
@@ -701,12 +699,12 @@ def _shape_chunk(entry: Mapping[str, Any], label: str, scale: float, ids: dict[s
 
 def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: float,
                 ids: dict[str, int], warnings: list[str], materials: list[Material] | None = None,
-                radiance: dict | None = None) -> _Chunk:
+                definitions: dict | None = None) -> _Chunk:
     """A geometry-file entry: every sub-mesh gets its mapped material or the default.
     Without either, a sub-mesh takes the material of its own name (its names in the order
     of the mapping), a ``[materials]`` table or, as Radiance's ``obj2rad`` and ``mesh``
     make a ``usemtl`` name a modifier, a modifier defined in the scene's Radiance files
-    (``radiance``, :func:`_radiance_files`; made a material and appended to
+    (``definitions``: name → (primitive, where it was read); made a material and appended to
     ``materials``).  Faces triangulated with a mismatch of areas are reported in
     ``warnings``."""
     check_keys(entry, FILE_KEYS, label)
@@ -720,12 +718,7 @@ def _file_chunk(entry: Mapping[str, Any], label: str, base_dir: Path, scale: flo
     mapped = {key: _material_id(value, f"{label}: materials.{key}", ids) for key, value in mapping.items()}
     label = f"{label} {file}"
     parts = load_mesh_file(base_dir / file, label, scale, warnings)
-    definitions = {}
-    if radiance:                                       # the radfile module only for Radiance files
-        from .radfile import modifier_definitions
-
-        definitions = {name: (p, w) for prims_, w in radiance.values()
-                       for name, p in modifier_definitions(prims_).items()}
+    definitions = definitions or {}
     vertices, material, matched = [], [], set()
     for part in parts:
         key = next((k for k in part.keys if k in mapped), None)
