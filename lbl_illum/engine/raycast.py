@@ -50,6 +50,14 @@ ON_SURFACE_FRACTION = 0.05
 MAX_GLASS_LAYERS = 16
 #: Rays per chunk handed to one embree call from one thread.
 CHUNK_RAYS = 32768
+#: In a scene with glass, closest-hit rays per triangle after which a BVH over every
+#: triangle is built for them.  Until then a closest hit is the nearer of the opaque and
+#: the glass BVHs' (which shadow rays need anyway): that costs about 0.1 µs more a ray
+#: (the office at ``draft``: 6 % of its calculation), a BVH about 0.9 µs a triangle
+#: (embreex fills Embree's buffers holding the GIL: 0.18 s for the cabin's 204,216, more
+#: than a small run's whole calculation).  Building once the extra cost has reached the
+#: build's costs at most about twice the better choice made in advance.
+ALL_BVH_RAYS_PER_TRIANGLE = 9
 
 
 def thread_count() -> int:
@@ -209,6 +217,14 @@ class Hits:
         return self.prim >= 0
 
 
+def self_hit_epsilon(points: np.ndarray, length_scale: float) -> np.ndarray:
+    """(n,) self-hit offset ε = ``SELF_HIT_EPSILON`` · (|P|∞ + ℓ) [m] of ``points`` [m] in a
+    scene of median edge ℓ = ``length_scale`` [m] (module docstring)."""
+    a = np.abs(np.asarray(points, np.float64))
+    # |P|∞ by columns: numpy's max over rows of three took 6× as long
+    return SELF_HIT_EPSILON * (np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2]) + length_scale)
+
+
 def median_edge(vertices: np.ndarray) -> float:
     """ℓ [m] of the self-hit offset: the median length of the triangles' first edges (1 m for none)."""
     edges = np.linalg.norm(vertices[:, 1] - vertices[:, 0], axis=1)
@@ -282,12 +298,17 @@ class RayCaster:
             list(_pool(self.threads).map(work, slices))
         return out if occluded else (t_out, p_out)
 
-    def first_hit(self, origins: np.ndarray, directions: np.ndarray, tmax=None) -> tuple[np.ndarray, np.ndarray]:
+    def first_hit(self, origins: np.ndarray, directions: np.ndarray, tmax=None,
+                  counted: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """(t (n,) [m], ``inf`` for none; prim (n,) int32, -1 for none) of the closest hit of
-        rays with unit ``directions`` ((n, 3) or one (3,) for all), up to ``tmax``."""
+        rays with unit ``directions`` ((n, 3) or one (3,) for all), up to ``tmax``;
+        ``counted=False``: the rays are already counted in :attr:`rays_traced` (the same
+        rays traced against another part of the scene)."""
         n = len(origins)
         if n == 0 or self._scene is None:
             return np.full(n, np.inf), np.full(n, -1, np.int32)
+        if not counted:
+            self.rays_traced -= n
         return self._run(origins, directions, tmax, occluded=False)
 
     def occluded(self, origins: np.ndarray, directions: np.ndarray, tmax=None) -> np.ndarray:
@@ -299,9 +320,7 @@ class RayCaster:
 
     def epsilon(self, points: np.ndarray) -> np.ndarray:
         """(n,) self-hit offset ε = ``SELF_HIT_EPSILON`` · (|P|∞ + ℓ) [m] (module docstring)."""
-        a = np.abs(np.asarray(points, np.float64))
-        # |P|∞ by columns: numpy's max over rows of three took 6× as long
-        return SELF_HIT_EPSILON * (np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2]) + self.length_scale)
+        return self_hit_epsilon(points, self.length_scale)
 
 
 class Tracer:
@@ -323,24 +342,49 @@ class Tracer:
         kind = np.asarray(material_kind)[triangles.material]
         self._glass_ids = np.flatnonzero(kind == GLASS).astype(np.int32)
         self._opaque_ids = np.flatnonzero(kind != GLASS).astype(np.int32)
-        self._all = RayCaster(verts, self.threads)
-        self._opaque = RayCaster(verts[self._opaque_ids], self.threads)
+        self._opaque = RayCaster(verts[self._opaque_ids] if len(self._glass_ids) else verts, self.threads)
         self._glass = RayCaster(verts[self._glass_ids], self.threads)
+        # closest hits: without glass, the opaque BVH is every triangle's; with glass, a
+        # third BVH over every triangle is built only once closest-hit rays pay for it
+        # (:data:`ALL_BVH_RAYS_PER_TRIANGLE`); until then a hit is the nearer of the parts'
+        self._all = self._opaque if len(self._glass_ids) == 0 else None
+        self._rays_without_all = 0
         self._glass_tau = np.asarray(transmittance, dtype=np.float64)[triangles.material[self._glass_ids]]
         self.normals = np.ascontiguousarray(triangles.normals, np.float64)
         self._v0 = np.ascontiguousarray(verts[:, 0], np.float64)
         self._has_spheres = bool(np.any(triangles.sphere >= 0))
-        self.length_scale = self._all.length_scale
+        self.length_scale = median_edge(verts)
 
     @property
     def rays_traced(self) -> int:
         """Rays traced so far, shadow rays and glass steps included."""
-        return self._all.rays_traced + self._opaque.rays_traced + self._glass.rays_traced
+        casters = (self._opaque, self._glass) if self._all in (None, self._opaque) else (
+            self._opaque, self._glass, self._all)
+        return sum(c.rays_traced for c in casters)
+
+    def epsilon(self, points: np.ndarray) -> np.ndarray:
+        """(n,) self-hit offset ε [m] at ``points`` in this scene (module docstring)."""
+        return self_hit_epsilon(points, self.length_scale)
 
     # -- queries --------------------------------------------------------------
     def intersect(self, origins: np.ndarray, directions: np.ndarray) -> Hits:
-        """Closest hit of (n, 3) rays with unit ``directions`` against every surface."""
-        return Hits(*self._all.first_hit(origins, directions))
+        """Closest hit of (n, 3) rays with unit ``directions`` against every surface: the
+        opaque surfaces' closest hit, or the glass's where that is nearer (at an equal
+        distance, the opaque surface), or once built, the BVH over every triangle's (which
+        may take either at an equal distance)."""
+        if self._all is None and self._rays_without_all >= ALL_BVH_RAYS_PER_TRIANGLE * len(self.triangles):
+            self._all = RayCaster(self.triangles.vertices, self.threads)
+        if self._all is not None:
+            return Hits(*self._all.first_hit(origins, directions))
+        self._rays_without_all += len(origins)
+        t, prim = self._opaque.first_hit(origins, directions)
+        hit = prim >= 0
+        prim[hit] = self._opaque_ids[prim[hit]]
+        t_glass, prim_glass = self._glass.first_hit(origins, directions, t, counted=False)
+        nearer = np.flatnonzero((prim_glass >= 0) & (t_glass < t))
+        t[nearer] = t_glass[nearer]
+        prim[nearer] = self._glass_ids[prim_glass[nearer]]
+        return Hits(t, prim)
 
     def transmittance(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray | None = None) -> np.ndarray:
         """(n, 3) fraction of light passing along each segment: 0 if an opaque surface
@@ -414,7 +458,7 @@ class Tracer:
         """
         points = np.asarray(points, dtype=np.float64)
         normals = np.asarray(normals, dtype=np.float64)
-        eps = self._all.epsilon(points)
+        eps = self.epsilon(points)
         for c, r in zip(self.triangles.sphere_center, self.triangles.sphere_radius):
             radial = points - c
             dist = np.linalg.norm(radial, axis=1)
@@ -455,9 +499,9 @@ class Tracer:
         points = np.asarray(points, dtype=np.float64)
         normals = np.asarray(normals, dtype=np.float64)
         origins = self.offset(points, normals)
-        if len(points) == 0 or self._all.empty:
+        if len(points) == 0 or len(self.triangles) == 0:
             return origins
-        eps = self._all.epsilon(points)
+        eps = self.epsilon(points)
         zero = ON_SURFACE_FRACTION * eps
         # 1. a surface just in front
         hits = self.intersect(points, normals)

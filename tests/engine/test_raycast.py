@@ -222,3 +222,32 @@ def test_through_panes_multiplies_each_panes_own_angle_and_stops_where_told():
     path = through_panes(tracer, materials, o[:1], d[:1], stop=lambda prim, ray: mat[prim] == target, layers=1)
     assert not path.reached[0] and not path.blocked[0] and path.prim[0] == -1
     np.testing.assert_allclose(path.product[0], first, rtol=1e-12)
+
+
+def test_closest_hits_in_a_glazed_scene_before_and_after_the_bvh_over_every_triangle(monkeypatch):
+    """With glass, a closest hit is first the nearer of the opaque and the glass BVHs'; once
+    closest-hit rays reach ALL_BVH_RAYS_PER_TRIANGLE a triangle, a BVH over every triangle
+    answers.  Both give a caster's over all triangles, hit for hit, and count each ray once."""
+    from lbl_illum.engine import raycast
+
+    rng = np.random.default_rng(3)
+    box = box_triangles([2, 3, 1.5], [4, 6, 3])
+    panes = np.array([[[1, -0.01, 1], [3, -0.01, 1], [3, -0.01, 2]], [[1, 1, 1], [3, 1, 1], [3, 1, 2.5]]], float)
+    verts = np.concatenate([panes[:1], box, panes[1:]])
+    tri = Triangles(verts, np.array([1] + [0] * len(box) + [1], np.int32), np.full(len(verts), -1, np.int32))
+    monkeypatch.setattr(raycast, "ALL_BVH_RAYS_PER_TRIANGLE", 2)
+    tracer = Tracer(tri, KINDS, TAU)
+    reference = RayCaster(verts)
+    o = rng.uniform([0.1, 0.1, 0.1], [3.9, 5.9, 2.9], (1000, 3))
+    d = rng.normal(size=(1000, 3))
+    o[:200, 1] = -2.0                                  # from outside, at the outer pane
+    d[:200] = rng.uniform([1.2, 0, 1.2], [2.8, 0, 1.8], (200, 3)) - o[:200]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    want_t, want_prim = reference.first_hit(o, d)
+    assert (want_prim == 0).sum() > 50 and (want_prim == len(verts) - 1).sum() > 5   # panes before walls
+    for call in range(2):                              # 1000 rays ≥ 2 × 14 triangles: the second builds it
+        hits = tracer.intersect(o, d)
+        assert (tracer._all is not None) == (call == 1)
+        np.testing.assert_array_equal(hits.prim, want_prim)
+        np.testing.assert_array_equal(hits.t, want_t)
+    assert tracer.rays_traced == 2000
