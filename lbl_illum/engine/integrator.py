@@ -400,8 +400,9 @@ class Integrator:
         return self.context.level_active(k, self.options.bounces, self.options.ambient)
 
     def _new_cache(self, points) -> IrradianceCache:
-        lo = np.minimum(self.scene.triangles.bounds[0], points.min(axis=0))
-        hi = np.maximum(self.scene.triangles.bounds[1], points.max(axis=0))
+        bounds = self.scene.triangles.bounds
+        lo = np.minimum(bounds[0], points.min(axis=0))
+        hi = np.maximum(bounds[1], points.max(axis=0))
         half = 0.5 * float(np.max(hi - lo)) * 1.01 + 1e-9
         return IrradianceCache(self.fingerprint, self.accuracies, 0.5 * (lo + hi), half, anisotropic=self.hessian)
 

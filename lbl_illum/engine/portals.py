@@ -237,6 +237,6 @@ def build_portals(scene, tracer, materials, find: bool = True, rng: np.random.Ge
     sampler = TriangleSampler(Triangles(vertices, np.zeros(len(vertices), np.int32),
                                         np.full(len(vertices), -1, np.int32)), np.arange(len(vertices)))
     portals = PortalSet(sampler, prim, outward, centres, found, dropped)
-    portals.tolerance = 1e-6 * float(np.max(np.ptp(tri.vertices.reshape(-1, 3), axis=0)))
+    portals.tolerance = 1e-6 * float(np.max(np.diff(tri.bounds, axis=0)))
     portals.enclosure = _enclosure(tracer, portals, rng)
     return portals

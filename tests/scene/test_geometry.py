@@ -254,3 +254,10 @@ def test_duplicate_mask_on_a_mesh():
     assert not duplicate_mask(s).any()
     both = duplicate_mask(np.concatenate([s, s[:, [2, 0, 1]]]))
     assert not both[:len(s)].any() and both[len(s):].all()
+
+
+def test_corner_bounds_are_the_least_and_greatest_coordinates():
+    from lbl_illum.scene.geometry import corner_bounds
+
+    v = np.random.default_rng(0).normal(size=(1000, 3, 3)) * [1.0, 10.0, 100.0]
+    np.testing.assert_array_equal(corner_bounds(v), [v.reshape(-1, 3).min(axis=0), v.reshape(-1, 3).max(axis=0)])
