@@ -39,8 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CACHED_SUFFIXES", "READER_VERSION", "cache_folder", "cache_key", "kept_shape", "load", "load_radiance",
-           "radiance_key", "store", "store_radiance"]
+__all__ = ["CACHED_SUFFIXES", "READER_VERSION", "cache_folder", "cache_key", "kept_shape", "load", "load_kept",
+           "load_radiance", "radiance_key", "store", "store_kept", "store_radiance"]
 
 #: Formats whose geometry lies wholly in the one file.
 CACHED_SUFFIXES = (".obj", ".ply", ".stl", ".off", ".glb")
@@ -120,6 +120,20 @@ def store(key: str | None, parts, warnings, meta: dict | None = None, arrays: di
                 os.unlink(tmp)
     except OSError:
         return
+
+
+def load_kept(key: str | None) -> tuple[dict, dict] | None:
+    """``(meta, arrays)`` that :func:`store_kept` kept under ``key``, or None (no entry, or
+    one that cannot be read)."""
+    kept = _load_entry(key)
+    return None if kept is None else (kept[2], kept[3])
+
+
+def store_kept(key: str | None, meta: dict, arrays: dict) -> None:
+    """Keep what was derived from a scene's geometry under ``key`` (the unglazed openings
+    found in it, :mod:`lbl_illum.engine.openings`): ``meta`` (JSON, its own keys besides
+    ``parts`` and ``warnings``) and ``arrays`` (named not starting with ``v``)."""
+    store(key, [], [], meta=meta, arrays=arrays)
 
 
 def kept_shape(name: str, make) -> np.ndarray:

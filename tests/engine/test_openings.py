@@ -76,6 +76,41 @@ def test_a_keyhole_wall_and_a_roof_opening():
     assert np.allclose(found[1].normal, [0, -1, 0])
 
 
+def test_a_search_made_before_is_read_back_with_the_random_state_it_left(tmp_path, monkeypatch):
+    """The second search of the same triangles comes from the cache folder: the same openings
+    and the random generator in the state a search leaves it in; other triangles, or no
+    cache folder, are searched."""
+    from lbl_illum.engine import openings
+
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", str(tmp_path))
+    scene = scene_of(box_room(south=False) + wall_with_hole(0.0, hole=(0.5, 2.5, 0.8, 2.2)))
+    mt = scene.material_table
+    tracer = Tracer(scene.triangles, mt.kind, mt.transmittance)
+    glass = mt.kind[scene.triangles.material] == GLASS
+    searches = []
+    search = openings._search
+    monkeypatch.setattr(openings, "_search", lambda *a: searches.append(1) or search(*a))
+
+    def run(vertices):
+        rng = np.random.default_rng(7)
+        found = find_openings(vertices, glass, tracer, rng)
+        return found, rng.random(4)
+
+    first, after_first = run(scene.triangles.vertices)
+    second, after_second = run(scene.triangles.vertices)
+    assert len(searches) == 1 and len(first) == 1 and first[0].area == pytest.approx(2.8)
+    np.testing.assert_array_equal(after_first, after_second)
+    for a, b in zip(first, second):
+        for name in ("triangles", "area", "normal", "centre", "sky_fraction"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    run(scene.triangles.vertices + [0.0, 0.0, 1e-9])
+    assert len(searches) == 2
+    monkeypatch.setenv("LBL_ILLUM_CACHE_DIR", "off")
+    _, after_off = run(scene.triangles.vertices)
+    assert len(searches) == 3
+    np.testing.assert_array_equal(after_off, after_first)
+
+
 def test_glazed_holes_and_interior_doorways_are_no_openings():
     glazed = box_room(south=False) + wall_with_hole(0.0) + [PANE]
     assert openings_of(scene_of(glazed, glass={})) == []
