@@ -135,8 +135,9 @@ def test_the_second_process_imports_the_package_of_the_run_whatever_the_working_
 
 def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_alike():
     """A new process loads this package's kernels from numba's disk cache without importing
-    numba's typing and lowering registries (0.1 s of every run), and the loaded kernel gives
-    what it gives in this process, where it was compiled or loaded as numba does."""
+    numba's typing and lowering registries (0.1 s of every run) or the module of the
+    ``np.empty`` the kernel calls (for globals its code never reads), and the loaded kernel
+    gives what it gives in this process, where it was compiled or loaded as numba does."""
     from lbl_illum.engine import placement
 
     rng = np.random.default_rng(3)
@@ -148,13 +149,34 @@ def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_
             f"rng = np.random.default_rng(3); key = rng.integers(0, 40, 500).astype(np.int64); off = rng.random(500); "
             "out = [a.tolist() for a in placement._nearest_per_key(key, off)]; "
             "print(json.dumps([out, 'numba.typed.typeddict' in sys.modules, 'numba.np.npyimpl' in sys.modules, "
-            "'numba.np.arraymath' in sys.modules]))")
+            "'numba.np.arraymath' in sys.modules, 'numba.np.arrayobj' in sys.modules]))")
     import json
 
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    there, typed_loaded, ufuncs_loaded, numpy_functions_loaded = json.loads(out)
+    there, typed_loaded, ufuncs_loaded, numpy_functions_loaded, empty_loaded = json.loads(out)
     assert there == here
-    assert not typed_loaded and not ufuncs_loaded and not numpy_functions_loaded
+    assert not typed_loaded and not ufuncs_loaded and not numpy_functions_loaded and not empty_loaded
+
+
+def test_a_kernel_loaded_lightly_links_into_a_kernel_compiled_after_it():
+    """The bitcode a light load leaves unparsed is parsed when a kernel compiled later in the
+    same process calls the loaded one (numba links the callee's bitcode into the caller),
+    and the caller computes what the kernel computes called directly."""
+    compiled._dispatcher("placement:_nearest_per_key").compile(compiled._argument_types("(int64[::1], float64[::1])"))
+    code = ("import json, numpy as np; from numba import njit; from lbl_illum.engine import placement; "
+            "rng = np.random.default_rng(5); key = rng.integers(0, 30, 400).astype(np.int64); off = rng.random(400); "
+            "direct = [a.tolist() for a in placement._nearest_per_key(key, off)]; "
+            "library = placement._nearest_per_key.overloads[placement._nearest_per_key.signatures[0]].library; "
+            "unparsed = '_shared_bitcode' in library.__dict__; "
+            "caller = njit(lambda k, o: placement._nearest_per_key(k, o)); "
+            "linked = [a.tolist() for a in caller(key, off)]; "
+            "print(json.dumps([direct == linked, len(direct[0]), unparsed, '_shared_bitcode' in library.__dict__]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    import json
+
+    same, found, unparsed_after_loading, unparsed_after_linking = json.loads(out)
+    assert same and found > 0
+    assert unparsed_after_loading and not unparsed_after_linking
 
 
 def test_kernels_of_other_packages_load_as_numba_loads_them(tmp_path):
