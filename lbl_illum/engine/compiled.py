@@ -126,9 +126,14 @@ def _load_kernels_lightly() -> None:
         caching.Cache._load_overload, caching.Cache._guard_against_spurious_io_errors  # noqa: B018
         if getattr(numba_load, "_lbl_illum", False):
             return
-        light = _light_loading()
     except (ImportError, AttributeError):
         return
+    try:
+        light = _light_loading()
+    except (ImportError, AttributeError):
+        import contextlib
+
+        light = contextlib.nullcontext
     ours = __name__.split(".")[0] + "."
 
     def load_overload(self, sig, target_context):
@@ -146,8 +151,10 @@ def _light_loading():
     """A context manager under which numba loads a cached kernel of this package without
     parsing its bitcode for linking or importing numba modules for globals
     (:func:`_load_kernels_lightly`).  numba loads kernels holding its compiler lock, so
-    the flag it sets is seen by that load alone.  Raises AttributeError or ImportError
-    when numba's layout is not the one expected."""
+    the flag it sets is seen by that load alone; a library numba serialised otherwise
+    than expected loads numba's way.  Raises AttributeError or ImportError when numba's
+    layout is not the one expected (the kernels then load numba's way, still without
+    its compiler registries)."""
     import contextlib
 
     import llvmlite.binding as ll
@@ -183,10 +190,12 @@ def _light_loading():
             return self._codegen._engine.get_function_address(name)
 
     def unserialize(cls, codegen_, state):
-        name, kind, data = state
+        try:
+            name, kind, (object_code, shared_bitcode) = state
+        except (TypeError, ValueError):
+            kind = None
         if not loading or kind != "object" or codegen_._library_class is not base:
             return numba_unserialize(codegen_, state)
-        object_code, shared_bitcode = data
         library = LazyLinkingLibrary(codegen_, name)
         library.enable_object_caching()
         library._set_compiled_object(object_code)
