@@ -214,15 +214,21 @@ def _light_loading():
         return env
 
     base._unserialize = classmethod(unserialize)
-    environment._rebuild_env = rebuild_env
 
     @contextlib.contextmanager
     def light():
+        # numba pickles an environment as a call of ``environment._rebuild_env``, named
+        # when it saves a kernel: the name must then be numba's own function (a
+        # function of this module's would be pickled by value, with a flag of its own),
+        # so it is replaced only while a kernel of this package loads
+        environment._rebuild_env = rebuild_env
         loading.append(True)
         try:
             yield
         finally:
             loading.pop()
+            if not loading:
+                environment._rebuild_env = numba_rebuild_env
 
     return light
 

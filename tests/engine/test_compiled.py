@@ -133,18 +133,11 @@ def test_the_second_process_imports_the_package_of_the_run_whatever_the_working_
     assert Path(right.stdout.strip()) == Path(compiled.__file__)
 
 
-def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_alike():
+def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_alike(tmp_path):
     """A new process loads this package's kernels from numba's disk cache without importing
     numba's typing and lowering registries (0.1 s of every run) or the module of the
     ``np.empty`` the kernel calls (for globals its code never reads), and the loaded kernel
-    gives what it gives in this process, where it was compiled or loaded as numba does."""
-    from lbl_illum.engine import placement
-
-    rng = np.random.default_rng(3)
-    key = rng.integers(0, 40, 500).astype(np.int64)
-    off = rng.random(500)
-    compiled._dispatcher("placement:_nearest_per_key").compile(compiled._argument_types("(int64[::1], float64[::1])"))
-    here = [a.tolist() for a in placement._nearest_per_key(key, off)]
+    gives what the process that compiled it and wrote it to an empty cache got."""
     code = ("import sys, json, numpy as np; from lbl_illum.engine import placement; "
             f"rng = np.random.default_rng(3); key = rng.integers(0, 40, 500).astype(np.int64); off = rng.random(500); "
             "out = [a.tolist() for a in placement._nearest_per_key(key, off)]; "
@@ -152,8 +145,13 @@ def test_a_cached_kernel_loads_without_numba_s_compiler_registries_and_computes_
             "'numba.np.arraymath' in sys.modules, 'numba.np.arrayobj' in sys.modules]))")
     import json
 
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    there, typed_loaded, ufuncs_loaded, numpy_functions_loaded, empty_loaded = json.loads(out)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join(p for p in (str(Path(compiled.__file__).parents[2]),
+                                                      os.environ.get("PYTHONPATH")) if p))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                                      check=True).stdout) for _ in range(2)]
+    (here, *compiling), (there, typed_loaded, ufuncs_loaded, numpy_functions_loaded, empty_loaded) = runs
+    assert compiling[2] and list((tmp_path / "cache").rglob("*.nbi"))     # the first compiled and wrote it
     assert there == here
     assert not typed_loaded and not ufuncs_loaded and not numpy_functions_loaded and not empty_loaded
 
