@@ -25,7 +25,7 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from numba import prange
@@ -249,7 +249,13 @@ class RayCaster:
         if len(self.vertices):
             self._scene = rtcore_scene.EmbreeScene()
             TriangleMesh(self._scene, np.ascontiguousarray(self.vertices, dtype=np.float32))
-        self.length_scale = median_edge(self.vertices)
+
+    @cached_property
+    def length_scale(self) -> float:
+        """ℓ [m] of the self-hit offset (:func:`median_edge`), found when first asked for: a
+        scene's :class:`Tracer` keeps its own over every triangle, and its opaque and glass
+        casters never ask (0.01 s for the cabin's 204,216 triangles)."""
+        return median_edge(self.vertices)
 
     @property
     def empty(self) -> bool:
