@@ -59,11 +59,17 @@ class Sun:
 
     def sample_directions(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """(n, 3) directions uniform over the disk from (n,) uniform numbers ``u``, ``v``."""
-        cos_t = 1.0 - np.asarray(u) * (1.0 - SUN_COS_HALF_ANGLE)
+        cos_t = 1.0 - np.asarray(u, np.float64) * (1.0 - SUN_COS_HALF_ANGLE)
         sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
-        phi = 2.0 * np.pi * np.asarray(v)
+        phi = 2.0 * np.pi * np.asarray(v, np.float64)
         t, b = orthonormal_basis(self.direction[None, :])
-        return (sin_t * np.cos(phi))[:, None] * t + (sin_t * np.sin(phi))[:, None] * b + cos_t[:, None] * self.direction
+        # (sin θ cos φ, sin θ sin φ, cos θ) in the frame (t, b, sun): one product with the
+        # frame's rows instead of three (n, 3) temporaries
+        local = np.empty((len(cos_t), 3))
+        np.multiply(sin_t, np.cos(phi), out=local[:, 0])
+        np.multiply(sin_t, np.sin(phi), out=local[:, 1])
+        local[:, 2] = cos_t
+        return local @ np.vstack([t[0], b[0], self.direction])
 
     def within_disk(self, directions: np.ndarray) -> np.ndarray:
         """(n,) bool: which unit directions fall inside the solar disk."""

@@ -60,7 +60,7 @@ from .fingerprint import record_settings, scene_fingerprint
 from .gather import rows as take
 from .gradients import irradiance_gradients, limit_gradients
 from .hemisphere import cell_counts, cosine_directions, stratified_directions
-from ..scene.materials import russian_roulette
+from ..scene.materials import roulette_factors
 from ..options import Options
 from .placement import distance_bands, pick_per_cell
 from ..photometry import luminance
@@ -536,9 +536,11 @@ class Integrator:
         Returns ``(keep (m,) bool, weight (k, 3), importance (k,))`` of the hits kept.
         """
         child = importance[owner] * np.pi * luminance(weight)
-        keep, scaled = russian_roulette(child[:, None] * np.ones((1, 3)), rng, PATH_ROULETTE_LIMIT)
-        factor = scaled[keep, 0] / child[keep]
-        return keep, weight[keep] * factor[:, None].astype(weight.dtype), child[keep] * factor
+        keep, low, factor = roulette_factors(child, rng, PATH_ROULETTE_LIMIT)
+        scale = np.ones(len(child))
+        scale[low] = factor
+        scale = scale[keep]
+        return keep, weight[keep] * scale[:, None].astype(weight.dtype), child[keep] * scale
 
     def _trace_records(self, k, q: _Queries, pending: _Pending, key: int, run: RunPlan):
         """:meth:`_evaluate_hemispheres` for new records of level k at the queries ``q``, in

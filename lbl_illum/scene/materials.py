@@ -104,7 +104,7 @@ __all__ = ["Material", "MaterialTable", "DIFFUSE", "GLASS", "MIRROR", "LIGHT", "
            "GLASS_INDEX",
            "GLAZING_MODELS", "DEFAULT_GLASS_PORTAL", "material_from_table", "thin_pane_reflectance",
            "fresnel_interfaces", "glazing_optics", "pane_transmissivity", "max_transmittance", "plastic_fresnel",
-           "ward_brdf", "ward_pdf", "ward_sample", "russian_roulette", "POLISHED_ROUGHNESS2", "FRESNEL_THRESHOLD",
+           "ward_brdf", "ward_pdf", "ward_sample", "russian_roulette", "roulette_factors", "POLISHED_ROUGHNESS2", "FRESNEL_THRESHOLD",
            "PLASTIC_BRANCH_LIMIT"]
 
 DIFFUSE, GLASS, MIRROR, LIGHT, PLASTIC, OPENING, TRANSLUCENT = 0, 1, 2, 3, 4, 5, 6
@@ -425,16 +425,25 @@ def russian_roulette(through, rng: np.random.Generator, limit: float):
     with probability w / limit and then weighted limit / w, so the expected throughput is
     unchanged; branches with w ≤ 0 are dropped.  Returns ``(keep (k,) bool, through (k, 3))``.
     """
-    w = luminance(through)
-    low = w < limit
-    keep = w > 0.0
-    if low.any():
-        u = rng.random(int(low.sum()))
-        survive = u * limit < w[low]
-        keep[np.flatnonzero(low)] &= survive
+    keep, low, factor = roulette_factors(luminance(through), rng, limit)
+    if len(low):
         through = through.copy()
-        through[low] *= (limit / np.maximum(w[low], 1e-300))[:, None]
+        through[low] *= factor[:, None]
     return keep, through
+
+
+def roulette_factors(w, rng: np.random.Generator, limit: float):
+    """Russian roulette of branches of photometric throughput ``w`` (k,) (see
+    :func:`russian_roulette`).  Returns ``(keep (k,) bool, low, factor)``: the indices of
+    the branches below ``limit`` and the weight limit / w each of them takes if kept."""
+    low = np.flatnonzero(w < limit)
+    keep = w > 0.0
+    factor = np.empty(0)
+    if len(low):
+        w_low = w[low]
+        keep[low] &= rng.random(len(low)) * limit < w_low
+        factor = limit / np.maximum(w_low, 1e-300)
+    return keep, low, factor
 
 
 # ---------------------------------------------------------------------------
