@@ -348,8 +348,9 @@ def test_corpus_ladders():
     assert all(int(cr._arg(s.args, "-as")) == int(cr._arg(s.args, "-ad")) // 2 for s in cached)
     assert all(int(cr._arg(s.args, "-ar")) == cr.ambient_resolution(cr.AR_FACTOR, cube, zone) for s in cached)
     pure = [s for s in theirs if cr._arg(s.args, "-aa") == "0"]
-    assert [cr._arg(s.args, "-ad") for s in pure] == ["1024", "4096", "16384"]
-    assert all("-as" not in s.args and "-ar" not in s.args for s in pure)
+    assert [(cr._arg(s.args, "-ad"), cr._arg(s.args, "-as")) for s in pure] == \
+        [("1024", None), ("4096", None), ("16384", None), ("1024", "0"), ("4096", "0"), ("16384", "0")]
+    assert all("-ar" not in s.args for s in pure)
     assert 1 <= len(cr.radiance_ladder(cr.CORPUS, cube=cube, zone_size=zone, quick=True)) <= 2
 
 
