@@ -22,7 +22,7 @@ import pytest
 from lbl_illum import InputError, Options, compute_illuminance
 from lbl_illum.photometry import luminance_weights
 from lbl_illum.scene.materials import (GLASS_INDEX, PLASTIC, Material, MaterialTable, glazing_optics, material_from_table,
-                                 max_transmittance, pane_transmissivity, russian_roulette, ward_brdf, ward_pdf,
+                                 max_transmittance, pane_transmissivity, roulette_factors, russian_roulette, ward_brdf, ward_pdf,
                                  ward_sample)
 from lbl_illum.io.radiance import (GLAZING_CAL, export_radiance, glass_export, illuminance_from_rtrace,
                                 material_primitive, radiance_programs)
@@ -318,6 +318,20 @@ def test_russian_roulette_keeps_the_mean():
     np.testing.assert_allclose(out[keep].sum(axis=0) / len(keep), through[0], rtol=0.03)
     keep, out = russian_roulette(np.array([[0.5, 0.5, 0.5], [0.0, 0.0, 0.0]]), rng, 0.1)
     assert list(keep) == [True, False] and np.allclose(out[0], 0.5)
+
+
+def test_roulette_factors_keep_the_mean_of_scalar_throughputs():
+    rng = np.random.default_rng(4)
+    w = np.concatenate([np.full(200_000, 0.02), [0.5, 0.0]])
+    keep, low, factor = roulette_factors(w, rng, 0.1)
+    assert list(low) == list(range(200_000)) + [200_001]            # below the limit, the zero too
+    assert keep[200_000] and not keep[200_001]                       # strong kept as is, zero dropped
+    scale = np.ones(len(w))
+    scale[low] = factor
+    kept = (w * scale * keep)[:200_000]
+    # each weak branch survives with probability w / limit and then carries the limit
+    np.testing.assert_allclose(factor[:200_000], 0.1 / 0.02)
+    assert abs(kept.mean() - 0.02) < 4 * np.sqrt(0.02 * (0.1 - 0.02) / 200_000)
 
 
 # -- the engine ------------------------------------------------------------------------
