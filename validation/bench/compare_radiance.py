@@ -38,7 +38,7 @@ and by how much?*
   ``--accuracy --samples --point-samples`` settings and pure Monte Carlo at the sample
   counts of Radiance's ``-aa 0`` runs; one untimed
   run per case first), Radiance's is ``oconv`` plus ``rtrace -ab 11 …``
-  (``RADIANCE_LADDERS["corpus"]``: five (-aa, -ad) pairs, ``-aa 0`` at three -ad).
+  (``RADIANCE_LADDERS["corpus"]``: five (-aa, -ad) pairs, ``-aa 0`` at three -ad with the default ``-as`` and with ``-as 0``).
   Compared at ``CORPUS_ERROR_LEVELS`` (5 %, 2 %, 1 %, 0.5 %); a run on corpus cases
   only writes ``OUT/radiance-comparison-corpus/`` (``CORPUS_NAME``), so it leaves the
   classic scenes' report alone.
@@ -321,12 +321,13 @@ RADIANCE_LADDERS = {
     "office": {"ab": 8, "pairs": [(0.3, 256), (0.3, 512)] + [(0.2, ad) for ad in (512, 1024, 2048, 4096)]
                + [(0.1, ad) for ad in (512, 1024, 2048, 4096)] + [(0.05, ad) for ad in (512, 1024, 2048)],
                "as0": (1024, 2048), "ab_ladder": (5, 6, 7, 9), "ar_ladder": (4, 32),
-               "pure": (1024, 4096, 16384, 65536)},
+               "pure": (1024, 4096, 16384, 65536), "pure_as0": ()},
     # (kept short: every run on 1 M triangles takes minutes)
     "furnished": {"ab": 8, "pairs": [(0.3, 256), (0.2, 512), (0.1, 1024)],
-                  "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096)},
+                  "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096), "pure_as0": ()},
     "sphere-plane": {"ab": 1, "pairs": [(aa, ad) for aa in (0.2, 0.1, 0.05) for ad in (256, 1024, 4096)],
-                     "as0": (1024,), "ab_ladder": (), "ar_ladder": (2, 32), "pure": (256, 1024, 4096, 16384)},
+                     "as0": (1024,), "ab_ladder": (), "ar_ladder": (2, 32), "pure": (256, 1024, 4096, 16384),
+                     "pure_as0": ()},
     # corpus cases: -ab 11 = our presets' 10 bounces (the sky is Radiance's first); 11 runs a case
     CORPUS: {"ab": CORPUS_BOUNCES + 1, "pairs": [(0.2, 512), (0.1, 1024), (0.1, 2048), (0.05, 2048), (0.05, 4096)],
              "as0": (), "ab_ladder": (), "ar_ladder": (), "pure": (1024, 4096, 16384),
@@ -373,7 +374,7 @@ def radiance_ladder(kind: str, cube: float, zone_size: float, quick: bool = Fals
         add("-ar", rtrace_args(probe[0], probe[1], probe[1] // 2, ab, ar(f)))
     for ad in ladder["pure"]:
         add("-aa 0 (Monte Carlo)", rtrace_args(0.0, ad, None, ab))
-    for ad in ladder.get("pure_as0", ()):
+    for ad in ladder["pure_as0"]:
         add("-aa 0 -as 0 (Monte Carlo)", rtrace_args(0.0, ad, 0, ab))
     return dedupe(out)
 
